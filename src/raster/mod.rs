@@ -1,0 +1,1 @@
+//! The software rasterizer. It knows nothing about fur.

@@ -1,0 +1,1 @@
+//! Assembles one frame: base mesh, shells layer by layer, fins.

@@ -1,0 +1,1 @@
+//! Scenes: TOML files parsed into a typed, range-checked scene.

@@ -1,0 +1,1 @@
+//! The shading terms of the thesis (3.2–3.4) as small pure functions.
