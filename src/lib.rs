@@ -1,7 +1,7 @@
 //! pelage: a deterministic, pure-software CPU renderer for shell-and-fin fur.
 //!
 //! The modules follow the path the data takes, and lower stages never import higher ones:
-//! [`mesh`] (load, tangent frames, shells) → [`fur`] (strands, baked shell and fin textures) →
+//! [`camera`] (view and projection), [`mesh`] (load, tangent frames, shells) → [`fur`] (strands, baked shell and fin textures) →
 //! [`raster`] (clip, setup, bin, rasterize tiles; knows nothing about fur) → [`shading`] (the
 //! thesis's shading terms as small pure functions) → [`scene`] (TOML → typed scene) →
 //! [`render`] (assembles one frame: base mesh, shells layer by layer, fins).
@@ -10,6 +10,7 @@
 //! tile size, on every run.
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod fur;
 pub mod mesh;
 pub mod raster;

@@ -1,0 +1,241 @@
+//! The draw-call API: a caller supplies vertices, triangles, a vertex closure, a fragment
+//! closure and per-draw state; a [`Frame`] collects draws and runs them tile by tile.
+//!
+//! Setup (vertex stage, clipping, triangle setup, binning) runs when a draw is submitted;
+//! rasterization runs at [`Frame::flush`] or [`Frame::finish`]. Invariant: every tile replays the
+//! pending draws in submission order, each draw's triangles in index order, on one thread — so
+//! flushing early, the thread count and the tile size never change the image.
+
+use super::RasterError;
+use super::bin::TileGrid;
+use super::clip::{ClipVertex, clip_triangle};
+use super::framebuffer::{Framebuffer, TileTarget};
+use super::setup::{CullMode, SetupTriangle, setup_triangle};
+use super::tile::{Fragment, RasterStats, rasterize_triangle};
+use super::varyings::Varyings;
+use glam::Vec4;
+use rayon::prelude::*;
+
+/// The depth comparison of a draw: a fragment passes when `fragment_depth OP stored_depth`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum DepthCompare {
+    /// Always passes (no depth test).
+    Always,
+    /// Passes when strictly nearer.
+    #[default]
+    Less,
+    /// Passes when nearer or equal: lets coplanar layers drawn later win.
+    LessEqual,
+}
+
+/// How a fragment's colour combines with the framebuffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BlendMode {
+    /// Overwrite.
+    #[default]
+    Replace,
+    /// `src·a + dst·(1 − a)` (source alpha, one minus source alpha).
+    Alpha,
+    /// `src + dst` (one, one): counts overlaps, accumulates light.
+    Add,
+}
+
+/// Per-draw fixed-function state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DrawState {
+    /// Depth test.
+    pub depth_compare: DepthCompare,
+    /// Whether passing fragments write their depth.
+    pub depth_write: bool,
+    /// Colour blending.
+    pub blend: BlendMode,
+    /// Face culling.
+    pub cull: CullMode,
+}
+
+impl Default for DrawState {
+    /// Opaque geometry: depth test `Less`, depth write on, no blending, no culling.
+    fn default() -> Self {
+        DrawState {
+            depth_compare: DepthCompare::Less,
+            depth_write: true,
+            blend: BlendMode::Replace,
+            cull: CullMode::None,
+        }
+    }
+}
+
+/// A submitted draw with its closures erased, as the tile loop sees it.
+trait TileDraw: Send + Sync {
+    fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats);
+    fn triangle_count(&self) -> usize;
+}
+
+struct DrawCall<V, F> {
+    state: DrawState,
+    triangles: Vec<SetupTriangle>,
+    varyings: Vec<[V; 3]>,
+    bins: Vec<Vec<u32>>,
+    fragment: F,
+}
+
+impl<V, F> TileDraw for DrawCall<V, F>
+where
+    V: Varyings,
+    F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
+{
+    fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats) {
+        for &t in &self.bins[tile] {
+            let t = t as usize;
+            stats.triangles += 1;
+            rasterize_triangle(
+                &self.triangles[t],
+                &self.varyings[t],
+                &self.state,
+                &self.fragment,
+                target,
+                stats,
+            );
+        }
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+}
+
+/// Pending set-up triangles above which a draw flushes the frame, bounding memory. Flushing
+/// never changes the image.
+const AUTO_FLUSH_TRIANGLES: usize = 1 << 20;
+
+/// One frame being drawn into a framebuffer.
+pub struct Frame<'fb, 'a> {
+    framebuffer: &'fb mut Framebuffer,
+    pending: Vec<Box<dyn TileDraw + 'a>>,
+    pending_triangles: usize,
+    stats: RasterStats,
+}
+
+impl<'fb, 'a> Frame<'fb, 'a> {
+    /// Starts a frame; the framebuffer keeps its contents (clear it first if needed).
+    pub fn new(framebuffer: &'fb mut Framebuffer) -> Self {
+        Frame {
+            framebuffer,
+            pending: Vec::new(),
+            pending_triangles: 0,
+            stats: RasterStats::default(),
+        }
+    }
+
+    /// The framebuffer's tile layout.
+    pub fn grid(&self) -> TileGrid {
+        *self.framebuffer.grid()
+    }
+
+    /// Submits a draw: runs `vertex` on every vertex (in parallel), clips and sets up every
+    /// triangle and bins it. `fragment` returns the colour of a pixel, or `None` to discard it.
+    /// Fails, drawing nothing, when an index is out of range.
+    pub fn draw<I, V, VS, FS>(
+        &mut self,
+        vertices: &[I],
+        triangles: &[[u32; 3]],
+        state: DrawState,
+        vertex: VS,
+        fragment: FS,
+    ) -> Result<(), RasterError>
+    where
+        I: Sync,
+        V: Varyings + 'a,
+        VS: Fn(&I) -> ClipVertex<V> + Sync,
+        FS: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync + 'a,
+    {
+        if let Some((triangle, &index)) = triangles.iter().enumerate().find_map(|(t, tri)| {
+            tri.iter()
+                .find(|&&i| i as usize >= vertices.len())
+                .map(|i| (t, i))
+        }) {
+            return Err(RasterError::IndexOutOfRange {
+                triangle,
+                index,
+                vertex_count: vertices.len(),
+            });
+        }
+        let shaded: Vec<ClipVertex<V>> =
+            vertices.par_iter().with_min_len(256).map(&vertex).collect();
+        let grid = self.grid();
+        let (width, height) = (grid.width, grid.height);
+        let chunks: Vec<Vec<(SetupTriangle, [V; 3])>> = triangles
+            .par_chunks(1024)
+            .map(|chunk| {
+                let mut out = Vec::with_capacity(chunk.len());
+                for tri in chunk {
+                    let clip = tri.map(|i| shaded[i as usize]);
+                    clip_triangle(clip, |clipped| {
+                        if let Some(s) = setup_triangle(&clipped, width, height, state.cull) {
+                            out.push(s);
+                        }
+                    });
+                }
+                out
+            })
+            .collect();
+        let count: usize = chunks.iter().map(Vec::len).sum();
+        let mut set_up = Vec::with_capacity(count);
+        let mut varyings = Vec::with_capacity(count);
+        let mut bins = vec![Vec::new(); grid.tile_count()];
+        for (tri, v) in chunks.into_iter().flatten() {
+            grid.bin(&mut bins, set_up.len() as u32, &tri.bounds);
+            set_up.push(tri);
+            varyings.push(v);
+        }
+        self.pending_triangles += count;
+        self.pending.push(Box::new(DrawCall {
+            state,
+            triangles: set_up,
+            varyings,
+            bins,
+            fragment,
+        }));
+        if self.pending_triangles >= AUTO_FLUSH_TRIANGLES {
+            self.flush();
+        }
+        Ok(())
+    }
+
+    /// Rasterizes every pending draw, tiles in parallel.
+    pub fn flush(&mut self) {
+        if self.pending.is_empty() {
+            return;
+        }
+        let draws = &self.pending;
+        let per_tile: Vec<RasterStats> = self
+            .framebuffer
+            .tiles_mut()
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, target)| {
+                let mut stats = RasterStats::default();
+                for draw in draws {
+                    draw.rasterize_tile(i, target, &mut stats);
+                }
+                stats
+            })
+            .collect();
+        for s in per_tile {
+            self.stats += s;
+        }
+        self.pending.clear();
+        self.pending_triangles = 0;
+    }
+
+    /// Triangles submitted and set up but not yet rasterized.
+    pub fn pending_triangles(&self) -> usize {
+        self.pending.iter().map(|d| d.triangle_count()).sum()
+    }
+
+    /// Rasterizes what is pending and returns the frame's counters.
+    pub fn finish(mut self) -> RasterStats {
+        self.flush();
+        self.stats
+    }
+}

@@ -1,0 +1,386 @@
+//! Textures: RGBA8 texels with a box-filtered mip chain, sampled with GPU rules.
+//!
+//! The rules a GPU shader must follow to match (all in f32 unless stated):
+//! - A texel value is `byte / 255`.
+//! - Mip level `k+1` is `max(1, ⌊w/2⌋) × max(1, ⌊h/2⌋)`; its texel (x, y) is the rounded
+//!   average `(a + b + c + d + 2) >> 2` (integers) of texels (2x, 2y), (2x+1, 2y), (2x, 2y+1),
+//!   (2x+1, 2y+1) of level k, coordinates clamped to level k's size.
+//! - Addressing: `Wrap` takes the integer texel index modulo the size (Euclidean), `Clamp`
+//!   clamps it to `[0, size − 1]`. Non-finite coordinates are treated as 0.
+//! - `Nearest` reads texel `⌊u·w⌋` of level 0. `Bilinear` reads level 0 at `x = u·w − 0.5`,
+//!   `x0 = ⌊x⌋`, `fx = x − x0` (same for y) and returns
+//!   `lerp(lerp(t00, t10, fx), lerp(t01, t11, fx), fy)` with `lerp(a, b, t) = a + (b − a)·t`.
+//! - `Trilinear` computes the level of detail from the quad's coarse derivatives of (u, v):
+//!   `ρ = max(‖(∂u/∂x·w, ∂v/∂x·h)‖, ‖(∂u/∂y·w, ∂v/∂y·h)‖)`, `λ = log2(ρ)` (libm's `log2f`)
+//!   clamped to `[0, levels − 1]` (NaN → 0, +∞ → levels − 1); it samples levels `⌊λ⌋` and
+//!   `⌊λ⌋ + 1` bilinearly and returns `lerp(level0, level1, λ − ⌊λ⌋)`.
+
+use super::RasterError;
+use glam::{Vec2, Vec4};
+
+/// One mip level: row-major RGBA8 texels, row 0 at v = 0.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MipLevel {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width × height` texels.
+    pub texels: Vec<[u8; 4]>,
+}
+
+impl MipLevel {
+    #[inline]
+    fn texel(&self, x: i64, y: i64) -> [u8; 4] {
+        self.texels[(y as usize) * self.width as usize + x as usize]
+    }
+}
+
+/// An RGBA8 texture with its full mip chain.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Texture {
+    levels: Vec<MipLevel>,
+}
+
+/// Largest texture side accepted.
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
+
+impl Texture {
+    /// Builds a texture and its mip chain. Fails when the size is zero, too large, or does not
+    /// match the number of texels.
+    pub fn from_rgba8(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Result<Self, RasterError> {
+        let expected = width as usize * height as usize;
+        if width == 0
+            || height == 0
+            || width > MAX_TEXTURE_SIZE
+            || height > MAX_TEXTURE_SIZE
+            || texels.len() != expected
+        {
+            return Err(RasterError::TextureSize {
+                width,
+                height,
+                expected,
+                actual: texels.len(),
+            });
+        }
+        let mut levels = vec![MipLevel {
+            width,
+            height,
+            texels,
+        }];
+        while let Some(last) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+            levels.push(downsample(last));
+        }
+        Ok(Texture { levels })
+    }
+
+    /// Number of mip levels (1 for a 1×1 texture).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Mip level `k`, if it exists.
+    pub fn level(&self, k: usize) -> Option<&MipLevel> {
+        self.levels.get(k)
+    }
+
+    /// Width of level 0.
+    pub fn width(&self) -> u32 {
+        self.levels[0].width
+    }
+
+    /// Height of level 0.
+    pub fn height(&self) -> u32 {
+        self.levels[0].height
+    }
+}
+
+fn downsample(src: &MipLevel) -> MipLevel {
+    let width = (src.width / 2).max(1);
+    let height = (src.height / 2).max(1);
+    let (mx, my) = (i64::from(src.width) - 1, i64::from(src.height) - 1);
+    let mut texels = Vec::with_capacity(width as usize * height as usize);
+    for y in 0..i64::from(height) {
+        for x in 0..i64::from(width) {
+            let (x0, y0) = ((2 * x).min(mx), (2 * y).min(my));
+            let (x1, y1) = ((2 * x + 1).min(mx), (2 * y + 1).min(my));
+            let q = [
+                src.texel(x0, y0),
+                src.texel(x1, y0),
+                src.texel(x0, y1),
+                src.texel(x1, y1),
+            ];
+            texels.push(std::array::from_fn(|c| {
+                let sum: u32 = q.iter().map(|t| u32::from(t[c])).sum();
+                ((sum + 2) >> 2) as u8
+            }));
+        }
+    }
+    MipLevel {
+        width,
+        height,
+        texels,
+    }
+}
+
+/// What happens outside [0, 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AddressMode {
+    /// Repeat the texture (the fur tile is seamless).
+    #[default]
+    Wrap,
+    /// Repeat the edge texel.
+    Clamp,
+}
+
+/// How texels are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Filter {
+    /// The texel containing the point, level 0.
+    Nearest,
+    /// Four texels of level 0, bilinearly weighted.
+    Bilinear,
+    /// Bilinear in the two mip levels around the level of detail, linearly mixed.
+    #[default]
+    Trilinear,
+}
+
+/// Sampling state: addressing per axis and filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Sampler {
+    /// Addressing along u.
+    pub address_u: AddressMode,
+    /// Addressing along v.
+    pub address_v: AddressMode,
+    /// Filter.
+    pub filter: Filter,
+}
+
+static UNORM8: [f32; 256] = {
+    let mut t = [0.0f32; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = i as f32 / 255.0;
+        i += 1;
+    }
+    t
+};
+
+#[inline]
+fn to_vec4(t: [u8; 4]) -> Vec4 {
+    Vec4::new(
+        UNORM8[t[0] as usize],
+        UNORM8[t[1] as usize],
+        UNORM8[t[2] as usize],
+        UNORM8[t[3] as usize],
+    )
+}
+
+#[inline]
+fn address(i: i64, size: u32, mode: AddressMode) -> i64 {
+    match mode {
+        AddressMode::Wrap => i.rem_euclid(i64::from(size)),
+        AddressMode::Clamp => i.clamp(0, i64::from(size) - 1),
+    }
+}
+
+#[inline]
+fn finite_or_zero(x: f32) -> f32 {
+    if x.is_finite() { x } else { 0.0 }
+}
+
+/// The level of detail λ for a texture of `width`×`height` from the coarse derivatives of the
+/// texture coordinates, unclamped except for NaN (→ 0) and infinities (→ `f32::MAX`); a zero
+/// footprint gives −∞, which sampling clamps to level 0.
+#[inline]
+pub fn level_of_detail(ddx: Vec2, ddy: Vec2, width: u32, height: u32) -> f32 {
+    let size = Vec2::new(width as f32, height as f32);
+    let (along_x, along_y) = ((ddx * size).length(), (ddy * size).length());
+    if along_x.is_nan() || along_y.is_nan() {
+        return 0.0;
+    }
+    let rho = along_x.max(along_y);
+    if rho.is_infinite() {
+        return f32::MAX;
+    }
+    libm::log2f(rho)
+}
+
+impl Sampler {
+    /// Samples with the filter's rules; `ddx`, `ddy` are the screen derivatives of `uv`
+    /// (only `Trilinear` uses them).
+    #[inline]
+    pub fn sample(&self, texture: &Texture, uv: Vec2, ddx: Vec2, ddy: Vec2) -> Vec4 {
+        match self.filter {
+            Filter::Nearest => self.nearest(&texture.levels[0], uv),
+            Filter::Bilinear => self.bilinear(&texture.levels[0], uv),
+            Filter::Trilinear => {
+                let lod = level_of_detail(ddx, ddy, texture.width(), texture.height());
+                self.sample_level(texture, uv, lod)
+            }
+        }
+    }
+
+    /// Trilinear sample at an explicit level of detail (clamped to the chain).
+    #[inline]
+    pub fn sample_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
+        let max = (texture.levels.len() - 1) as f32;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, max)
+        };
+        let base = lod.floor();
+        let frac = lod - base;
+        let k = base as usize;
+        let a = self.bilinear(&texture.levels[k], uv);
+        if frac == 0.0 || k + 1 >= texture.levels.len() {
+            return a;
+        }
+        let b = self.bilinear(&texture.levels[k + 1], uv);
+        a + (b - a) * frac
+    }
+
+    #[inline]
+    fn nearest(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
+        let x = (finite_or_zero(uv.x) * level.width as f32).floor() as i64;
+        let y = (finite_or_zero(uv.y) * level.height as f32).floor() as i64;
+        to_vec4(level.texel(
+            address(x, level.width, self.address_u),
+            address(y, level.height, self.address_v),
+        ))
+    }
+
+    #[inline]
+    fn bilinear(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
+        let x = finite_or_zero(uv.x) * level.width as f32 - 0.5;
+        let y = finite_or_zero(uv.y) * level.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (xi, yi) = (x0 as i64, y0 as i64);
+        let xa = address(xi, level.width, self.address_u);
+        let xb = address(xi.saturating_add(1), level.width, self.address_u);
+        let ya = address(yi, level.height, self.address_v);
+        let yb = address(yi.saturating_add(1), level.height, self.address_v);
+        let t00 = to_vec4(level.texel(xa, ya));
+        let t10 = to_vec4(level.texel(xb, ya));
+        let t01 = to_vec4(level.texel(xa, yb));
+        let t11 = to_vec4(level.texel(xb, yb));
+        let top = t00 + (t10 - t00) * fx;
+        let bottom = t01 + (t11 - t01) * fx;
+        top + (bottom - top) * fy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker(size: u32) -> Texture {
+        let texels = (0..size * size)
+            .map(|i| {
+                if (i % size + i / size).is_multiple_of(2) {
+                    [255, 255, 255, 255]
+                } else {
+                    [0, 0, 0, 255]
+                }
+            })
+            .collect();
+        Texture::from_rgba8(size, size, texels).expect("texture")
+    }
+
+    #[test]
+    fn mip_chain_halves_down_to_one_texel() {
+        let t = checker(8);
+        assert_eq!(t.level_count(), 4);
+        let last = t.level(3).expect("level 3");
+        assert_eq!((last.width, last.height), (1, 1));
+        // A checkerboard averages to (255·2 + 2) >> 2 = 128.
+        assert_eq!(t.level(1).expect("level 1").texels[0], [128, 128, 128, 255]);
+        let odd = Texture::from_rgba8(5, 3, vec![[10, 20, 30, 40]; 15]).expect("odd");
+        assert_eq!(odd.level_count(), 3);
+        assert_eq!(odd.level(1).map(|l| (l.width, l.height)), Some((2, 1)));
+    }
+
+    #[test]
+    fn bad_sizes_are_refused() {
+        assert!(Texture::from_rgba8(0, 4, vec![]).is_err());
+        assert!(Texture::from_rgba8(2, 2, vec![[0; 4]; 3]).is_err());
+    }
+
+    #[test]
+    fn wrap_and_clamp_addressing() {
+        let texels = vec![[0, 0, 0, 0], [255, 0, 0, 0], [0, 255, 0, 0], [0, 0, 255, 0]];
+        let t = Texture::from_rgba8(4, 1, texels).expect("texture");
+        let wrap = Sampler {
+            filter: Filter::Nearest,
+            ..Sampler::default()
+        };
+        let clamp = Sampler {
+            filter: Filter::Nearest,
+            address_u: AddressMode::Clamp,
+            address_v: AddressMode::Clamp,
+        };
+        let at = |s: &Sampler, u: f32| s.sample(&t, Vec2::new(u, 0.5), Vec2::ZERO, Vec2::ZERO);
+        assert_eq!(at(&wrap, 1.3), at(&wrap, 0.3));
+        assert_eq!(at(&wrap, -0.1), Vec4::new(0.0, 0.0, 1.0, 0.0));
+        assert_eq!(at(&clamp, -0.1), Vec4::ZERO);
+        assert_eq!(at(&clamp, 7.0), Vec4::new(0.0, 0.0, 1.0, 0.0));
+        assert_eq!(at(&wrap, f32::NAN), Vec4::ZERO);
+    }
+
+    #[test]
+    fn bilinear_matches_f64_weights() {
+        let texels: Vec<[u8; 4]> = (0..16u8).map(|i| [i * 16, 255 - i * 16, i, 200]).collect();
+        let t = Texture::from_rgba8(4, 4, texels.clone()).expect("texture");
+        let s = Sampler {
+            filter: Filter::Bilinear,
+            ..Sampler::default()
+        };
+        for &(u, v) in &[(0.3f32, 0.6f32), (0.125, 0.125), (0.9, 0.05), (0.51, 0.49)] {
+            let got = s.sample(&t, Vec2::new(u, v), Vec2::ZERO, Vec2::ZERO);
+            let x = f64::from(u) * 4.0 - 0.5;
+            let y = f64::from(v) * 4.0 - 0.5;
+            let (x0, y0) = (x.floor(), y.floor());
+            let (fx, fy) = (x - x0, y - y0);
+            let tex = |xi: f64, yi: f64, c: usize| {
+                let xi = (xi as i64).rem_euclid(4) as usize;
+                let yi = (yi as i64).rem_euclid(4) as usize;
+                f64::from(texels[yi * 4 + xi][c]) / 255.0
+            };
+            for c in 0..4 {
+                let e = (1.0 - fy) * ((1.0 - fx) * tex(x0, y0, c) + fx * tex(x0 + 1.0, y0, c))
+                    + fy * ((1.0 - fx) * tex(x0, y0 + 1.0, c) + fx * tex(x0 + 1.0, y0 + 1.0, c));
+                assert!(
+                    (f64::from(got[c]) - e).abs() < 1e-6,
+                    "uv ({u},{v}) c{c}: {} vs {e}",
+                    got[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn level_of_detail_follows_the_footprint() {
+        let one_texel = Vec2::new(1.0 / 256.0, 0.0);
+        assert_eq!(level_of_detail(one_texel, Vec2::ZERO, 256, 256), 0.0);
+        assert_eq!(level_of_detail(one_texel * 4.0, Vec2::ZERO, 256, 256), 2.0);
+        assert_eq!(
+            level_of_detail(Vec2::ZERO, Vec2::new(0.0, 8.0 / 256.0), 256, 256),
+            3.0
+        );
+        assert_eq!(level_of_detail(Vec2::NAN, Vec2::ZERO, 256, 256), 0.0);
+        let t = checker(16);
+        let s = Sampler::default();
+        // Far away (a footprint of many texels) the checkerboard blurs to grey.
+        let far = s.sample(
+            &t,
+            Vec2::new(0.37, 0.61),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.0, 1.0),
+        );
+        assert!((far.x - 128.0 / 255.0).abs() < 1e-6, "{far:?}");
+        let inf = s.sample(&t, Vec2::new(0.37, 0.61), Vec2::INFINITY, Vec2::ZERO);
+        assert_eq!(inf, far);
+    }
+}
