@@ -295,6 +295,34 @@ mod tests {
     }
 
     #[test]
+    fn tapered_vertical_cone_tangents_point_inwards_by_facet() {
+        let p = FurParams {
+            texture_resolution: 64,
+            supersample: 1,
+            number_of_shells: 4,
+            circle_resolution: 8,
+            ..FurParams::default()
+        };
+        let mut s = vertical(0.5, 0.5, 1.0, 0.1);
+        s.tip_radius = 0.0;
+        let t = bake_shells(&p, &[s]).expect("bake");
+        let tan = |x: u32, y: u32| {
+            let c = t.layers[0].tangent.get(x, y).unwrap_or_default();
+            assert!(c[3] > 0, "({x},{y}) not covered");
+            tangent_from_rgb8([c[0], c[1], c[2]])
+        };
+        // Texel centres east (+u) and north (+v) of the axis at (0.5, 0.5) = texel edge 32.
+        let east = tan(36, 32);
+        let north = tan(32, 36);
+        let west = tan(27, 32);
+        assert!(east.x < -0.05 && east.z > 0.9, "{east}");
+        assert!(north.y < -0.05 && north.z > 0.9, "{north}");
+        assert!(west.x > 0.05, "{west}");
+        // Quantised to facets: a nearby texel in the same facet has the same tangent.
+        assert_eq!(tan(37, 32), east);
+    }
+
+    #[test]
     fn alpha_decreases_with_height() {
         let p = FurParams {
             number_of_strands: 600,

@@ -139,8 +139,8 @@ pub(crate) struct GridMap {
 
 /// Calls `f(cell index, t, offset)` for every grid cell whose centre `q` lies within the
 /// interpolated radius of the 2D segment `a → b`: with `t` the parameter of the closest point
-/// `c = a + t(b − a)` (`t = 0` for a point-like segment), the cell is covered when
-/// `|q − c| ≤ ra + t(rb − ra)`; `offset = q − c`. Cells are visited row by row over the
+/// `c = a + t(b − a)`, the cell is covered when `|q − c| ≤ ra + t(rb − ra)` (for a point-like
+/// segment `t = 0` and the radius is `max(ra, rb)`); `offset = q − c`. Cells are visited row by row over the
 /// segment's bounding box only; wrapped cells are reported at their wrapped index.
 pub(crate) fn raster_capsule(
     map: &GridMap,
@@ -187,7 +187,7 @@ pub(crate) fn raster_capsule(
                 0.0
             };
             let offset = q - (a + ab * t);
-            let r = ra + dr * t;
+            let r = if len2 > 0.0 { ra + dr * t } else { rmax };
             if offset.length_squared() <= r * r {
                 f(row + ix.rem_euclid(nx) as usize, t, offset);
             }
