@@ -67,7 +67,8 @@ pub(crate) fn cones_of(strands: &[Strand], segments: u32) -> (Vec<Vec<ConeSegmen
 /// height falls in, the top boundary included in the last layer). The clipped part's cone is
 /// projected straight down: subsamples whose centre lies within the interpolated radius of the
 /// projected axis are covered, wrapping around the tile edges; the subsample's angle around the
-/// axis selects the facet whose tangent is stored (see [`cone`](super::cone)). After the box
+/// axis selects the facet whose tangent is stored (see "Cones and tangents" in [the module
+/// docs](super)). After the box
 /// downsample, `alpha = covered fraction · gaussian_layer_weight(layer_mid_height(i, N), σ)`.
 /// When no strand point is above 0, `H = max_height`.
 pub fn bake_shells(params: &FurParams, strands: &[Strand]) -> Result<ShellTextures, FurError> {
@@ -383,6 +384,53 @@ mod tests {
         assert!(n > 0);
         // A tapered cone: tangents differ around the circumference.
         assert!(distinct.len() > 1);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
+        /// Any valid small configuration bakes; no layer is more opaque than its Gaussian weight.
+        #[test]
+        fn alpha_bounded_by_gaussian(
+            seed in proptest::prelude::any::<u32>(),
+            strands in 0u32..150,
+            shells in 1u32..7,
+            res in 1u32..24,
+            ss in 1u32..4,
+            circle in 3u32..40,
+            segments in 1u32..30,
+            slope in 0.0f32..85.0,
+            curl in -2.0f32..2.0,
+            jitter in 0.0f32..1.0,
+            sigma in 0.05f32..3.0,
+        ) {
+            let p = FurParams {
+                number_of_strands: strands,
+                number_of_shells: shells,
+                texture_resolution: res,
+                supersample: ss,
+                circle_resolution: circle,
+                strand_resolution: segments,
+                slope_deg: slope,
+                curl,
+                jitter,
+                gaussian_sigma: sigma,
+                ..FurParams::default()
+            };
+            let s = generate_strands(&p, seed).expect("valid");
+            let t = bake_shells(&p, &s).expect("bake");
+            proptest::prop_assert_eq!(t.layers.len(), shells as usize);
+            for (i, layer) in t.layers.iter().enumerate() {
+                let w = super::super::image::unorm8(gaussian_layer_weight(
+                    layer_mid_height(i as u32, shells),
+                    sigma,
+                ));
+                proptest::prop_assert_eq!(layer.colour.texels.len(), (res * res) as usize);
+                for (c, tan) in layer.colour.texels.iter().zip(&layer.tangent.texels) {
+                    proptest::prop_assert!(c[3] <= w);
+                    proptest::prop_assert_eq!(c[3], tan[3]);
+                }
+            }
+        }
     }
 
     #[test]

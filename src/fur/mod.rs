@@ -9,6 +9,25 @@
 //! row-major from row 0 (`v = 0`); 8-bit values use [`unorm8`]; tangents are stored as
 //! `unorm8(t·0.5 + 0.5)` and read back with [`tangent_from_rgb8`]. Every result is identical
 //! for any rayon thread count.
+//!
+//! # Cones and tangents (thesis 3.1.1, figures 3.3, 3.4, 3.7)
+//! A strand sampled at `strand_resolution` equal Bézier parameter steps becomes a chain of
+//! truncated cones (radius linear from `base_radius` to `tip_radius` in the parameter), each with
+//! `circle_resolution` = `C` flat facets. Each segment has a frame `(e1, e2)` perpendicular to its
+//! axis: `e1` is `+x` made perpendicular to the axis (`+y` when the axis is within `acos 0.9` of
+//! `x`), `e2 = axis × e1`; angles around the axis start at `e1` and grow towards `e2`; facet `j`
+//! spans `[j, j+1)·2π/C`. The tangent of facet `j` is its slanted centre line, from the middle of
+//! its base-circle chord to the middle of its top-circle chord:
+//! `normalize(d + (r1 − r0)·cos(π/C)·(cos φ_j e1 + sin φ_j e2))`, `d` the segment's axis vector and
+//! `φ_j = (j + ½)·2π/C`. A tapered cone thus gives tangents that vary around its circumference,
+//! quantised to `C` facets (why the thesis calls `circle_resolution` the lighting resolution). A
+//! texel inside the cone, exposed by slicing, takes the tangent of the outer facet at its angle.
+//!
+//! # Alpha
+//! Straight (not premultiplied). Shell layer `i` of `N`: covered fraction ·
+//! [`gaussian_layer_weight`]`((i + ½)/N, gaussian_sigma)` = `exp(−((i+½)/N)² / (2σ²))`.
+//! Texels no strand covers have alpha 0 and borrow colour and tangent from covered 8-neighbours
+//! (dilation, for bilinear filtering), else [`EMPTY_COLOUR`] and [`EMPTY_TANGENT`].
 
 mod bake;
 mod cone;
