@@ -13,6 +13,7 @@
 pub mod camera;
 pub mod fur;
 pub mod mesh;
+pub mod output;
 pub mod raster;
 pub mod render;
 pub mod scene;

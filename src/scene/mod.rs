@@ -1,1 +1,411 @@
-//! Scenes: TOML files parsed into a typed, range-checked scene.
+//! Scenes: TOML files parsed into a typed, range-checked [`Scene`].
+//!
+//! Every key has a default (the thesis's base values of chapter 4.1 where it gives one), unknown
+//! keys are errors, and every value is range-checked. Errors name the file, the line and the
+//! key (`scenes/x.toml:12: fur.number_of_shells = 0 is outside 1..=256`).
+
+mod validate;
+
+use glam::Vec3;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+pub use validate::Limits;
+
+/// The furred torus of thesis figure 3.1, embedded so `pelage render` works with no file.
+pub const DEFAULT_SCENE: &str = include_str!("../../scenes/torus.toml");
+/// The name errors use for the embedded scene.
+pub const DEFAULT_SCENE_NAME: &str = "<embedded scenes/torus.toml>";
+
+/// A scene that failed to load: where, and why.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct SceneError {
+    /// The scene file.
+    pub file: String,
+    /// 1-based line of the offending key, when known.
+    pub line: Option<usize>,
+    /// What is wrong, naming the key.
+    pub message: String,
+}
+
+/// A whole scene.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Scene {
+    /// Every random choice derives from this seed.
+    pub seed: u32,
+    /// Output image.
+    pub image: ImageSettings,
+    /// The camera.
+    pub camera: CameraSettings,
+    /// The furred object.
+    pub mesh: MeshSettings,
+    /// Fur modelling parameters (thesis 3.1, chapter 4.1 names).
+    pub fur: FurSettings,
+    /// Shading parameters (thesis 3.2).
+    pub shading: ShadingSettings,
+    /// The directional light.
+    pub light: LightSettings,
+    /// Directory relative paths are resolved against (the scene file's folder).
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Scene {
+            seed: 1234,
+            image: ImageSettings::default(),
+            camera: CameraSettings::default(),
+            mesh: MeshSettings::default(),
+            fur: FurSettings::default(),
+            shading: ShadingSettings::default(),
+            light: LightSettings::default(),
+            base_dir: PathBuf::from("."),
+        }
+    }
+}
+
+/// `[image]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImageSettings {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Clear colour, RGB in [0, 1].
+    pub background: Vec3,
+}
+
+impl Default for ImageSettings {
+    fn default() -> Self {
+        ImageSettings {
+            width: 640,
+            height: 480,
+            background: Vec3::new(0.32, 0.36, 0.42),
+        }
+    }
+}
+
+/// `[camera]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraSettings {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Up direction.
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+    /// Near plane.
+    pub near: f32,
+    /// Far plane.
+    pub far: f32,
+}
+
+impl Default for CameraSettings {
+    fn default() -> Self {
+        CameraSettings {
+            eye: Vec3::new(0.0, 9.0, 14.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 45.0,
+            near: 0.1,
+            far: 100.0,
+        }
+    }
+}
+
+/// Which object carries the fur.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MeshKind {
+    /// The thesis's main object.
+    #[default]
+    Torus,
+    /// A UV sphere.
+    Sphere,
+    /// An open tube.
+    Cylinder,
+    /// A procedural leg (thesis figure 3.11).
+    Leg,
+    /// A Wavefront OBJ file (`path`, relative to the scene file).
+    Obj,
+}
+
+/// `[mesh]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeshSettings {
+    /// The object.
+    pub kind: MeshKind,
+    /// Torus: distance from the centre to the tube's centre.
+    pub major_radius: f32,
+    /// Torus: tube radius.
+    pub minor_radius: f32,
+    /// Sphere, cylinder and leg: radius.
+    pub radius: f32,
+    /// Cylinder and leg: length.
+    pub height: f32,
+    /// Triangle count of procedural meshes (thesis `modelResolution`, base 500).
+    pub model_resolution: u32,
+    /// OBJ file, relative to the scene file.
+    pub path: Option<PathBuf>,
+    /// Uniform scale applied to OBJ positions.
+    pub scale: f32,
+}
+
+impl Default for MeshSettings {
+    fn default() -> Self {
+        MeshSettings {
+            kind: MeshKind::Torus,
+            major_radius: 6.0,
+            minor_radius: 2.4,
+            radius: 2.0,
+            height: 4.0,
+            model_resolution: 500,
+            path: None,
+            scale: 1.0,
+        }
+    }
+}
+
+/// How shells are spaced between the skin and `model_difference`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ShellSpacingSetting {
+    /// Equal steps.
+    #[default]
+    Uniform,
+    /// Closer together towards the tips (thesis 3.1.4, for few shells).
+    DenserNearTip,
+}
+
+/// `[fur]`: names follow the thesis (chapter 4.1).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FurSettings {
+    /// Strands in one texture tile (`numberOfStrands`, base 1000).
+    pub number_of_strands: u32,
+    /// Bézier segments per strand (`strandResolution`, base 20).
+    pub strand_resolution: u32,
+    /// Facets around a strand's cone (`circleResolution`, base 10).
+    pub circle_resolution: u32,
+    /// Shell layers (`numberOfShells`, base 10).
+    pub number_of_shells: u32,
+    /// Texels per side of a shell texture (`textureResolution`, base 128).
+    pub texture_resolution: u32,
+    /// Distance from the skin to the outermost shell, world units (`modelDifference`, base 1.0).
+    pub model_difference: f32,
+    /// Shell spacing.
+    pub shell_spacing: ShellSpacingSetting,
+    /// How many times the fur tile repeats along the mesh's u and v.
+    pub texture_repeat: [f32; 2],
+    /// Fur colour, RGB.
+    pub colour: Vec3,
+    /// Per-strand brightness variation, 0..1.
+    pub colour_variation: f32,
+    /// Strand lean from the vertical, degrees.
+    pub slope_deg: f32,
+    /// Extra bend of the tip, 0..1.
+    pub curl: f32,
+    /// Random jitter of the Bézier points, 0..1.
+    pub jitter: f32,
+    /// Shortest strand, as a fraction of the longest.
+    pub min_height: f32,
+    /// Strand radius at the root, in tile widths.
+    pub base_thickness: f32,
+    /// Strand radius at the tip, in tile widths.
+    pub tip_thickness: f32,
+    /// Supersampling factor of the bake (thesis 3.1.3).
+    pub supersample: u32,
+    /// Width of the Gaussian alpha falloff over height, as a fraction of the strand height.
+    pub gaussian_sigma: f32,
+    /// Whether fins are drawn at silhouettes.
+    pub fins: bool,
+    /// Angle windows, degrees, between eye vector and normal where fins are drawn.
+    pub fin_windows: Vec<[f32; 2]>,
+    /// Fin strands are this much taller than shell strands.
+    pub fin_height_scale: f32,
+}
+
+impl Default for FurSettings {
+    fn default() -> Self {
+        FurSettings {
+            number_of_strands: 1000,
+            strand_resolution: 20,
+            circle_resolution: 10,
+            number_of_shells: 10,
+            texture_resolution: 128,
+            model_difference: 1.0,
+            shell_spacing: ShellSpacingSetting::Uniform,
+            texture_repeat: [8.0, 4.0],
+            colour: Vec3::new(0.45, 0.28, 0.15),
+            colour_variation: 0.25,
+            slope_deg: 20.0,
+            curl: 0.3,
+            jitter: 0.3,
+            min_height: 0.7,
+            base_thickness: 0.012,
+            tip_thickness: 0.004,
+            supersample: 2,
+            gaussian_sigma: 0.6,
+            fins: true,
+            fin_windows: vec![[70.0, 110.0], [160.0, 200.0]],
+            fin_height_scale: 1.2,
+        }
+    }
+}
+
+/// Debug views replacing the shaded colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DebugView {
+    /// Normal shading.
+    #[default]
+    None,
+    /// The strand tangents as colours (thesis figure 3.8).
+    Tangents,
+    /// The shell alpha as grey.
+    Alpha,
+    /// The shell self-shadow alone.
+    Shadow,
+}
+
+/// Term weights of eq. 3.7.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WeightSettings {
+    /// Ambient weight.
+    pub ambient: f32,
+    /// Diffuse weight.
+    pub diffuse: f32,
+    /// Specular weight.
+    pub specular: f32,
+    /// Dampened specular weight.
+    pub dampened: f32,
+    /// Shadow weight.
+    pub shadow: f32,
+}
+
+impl Default for WeightSettings {
+    fn default() -> Self {
+        WeightSettings {
+            ambient: 1.0,
+            diffuse: 1.0,
+            specular: 1.0,
+            dampened: 1.0,
+            shadow: 0.08,
+        }
+    }
+}
+
+/// `[shading]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ShadingSettings {
+    /// Ambient level (ψ_ambient = ambient · strandColour).
+    pub ambient: f32,
+    /// Banks's exponent on the Kajiya–Kay diffuse (4.8).
+    pub banks_exponent: f32,
+    /// Kajiya–Kay specular exponent.
+    pub specular_exponent: f32,
+    /// The low exponent of the dampened specular.
+    pub dampened_exponent: f32,
+    /// 1 or 3 specular tangents (Scheuermann).
+    pub specular_tangents: u32,
+    /// How far the two extra tangents are shifted along the normal.
+    pub tangent_shift: f32,
+    /// n of "height/n" (table 4.4): the bottom layer makes N/n shadow lookups.
+    pub shadow_divisor: u32,
+    /// Term weights.
+    pub weights: WeightSettings,
+    /// Replace shading with a debug view.
+    pub debug_view: DebugView,
+}
+
+impl Default for ShadingSettings {
+    fn default() -> Self {
+        ShadingSettings {
+            ambient: 0.25,
+            banks_exponent: 4.8,
+            specular_exponent: 24.0,
+            dampened_exponent: 4.0,
+            specular_tangents: 1,
+            tangent_shift: 0.15,
+            shadow_divisor: 5,
+            weights: WeightSettings::default(),
+            debug_view: DebugView::None,
+        }
+    }
+}
+
+/// `[light]`
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LightSettings {
+    /// Direction towards the light (normalised on use).
+    pub direction: Vec3,
+    /// Light colour.
+    pub colour: Vec3,
+}
+
+impl Default for LightSettings {
+    fn default() -> Self {
+        LightSettings {
+            direction: Vec3::new(0.5, 1.0, 0.3),
+            colour: Vec3::ONE,
+        }
+    }
+}
+
+impl Scene {
+    /// Parses and validates scene text; `file` names it in errors, `base_dir` resolves paths.
+    pub fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError {
+            file: file.to_string(),
+            line: e.span().map(|s| line_of_offset(text, s.start)),
+            message: e.message().trim().to_string(),
+        })?;
+        scene.base_dir = base_dir.to_path_buf();
+        validate::validate(&scene, &Limits::default()).map_err(|(key, message)| SceneError {
+            file: file.to_string(),
+            line: validate::line_of_key(text, &key),
+            message,
+        })?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.display().to_string(),
+            line: None,
+            message: format!("cannot read the scene: {e}"),
+        })?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        Scene::parse(&text, &path.display().to_string(), dir)
+    }
+
+    /// The embedded default scene (thesis figure 3.1).
+    pub fn embedded_default() -> Result<Scene, SceneError> {
+        Scene::parse(DEFAULT_SCENE, DEFAULT_SCENE_NAME, Path::new("scenes"))
+    }
+
+    /// Checks the scene again (after a caller changed fields, e.g. from the command line).
+    pub fn revalidate(&self, file: &str) -> Result<(), SceneError> {
+        validate::validate(self, &Limits::default()).map_err(|(_, message)| SceneError {
+            file: file.to_string(),
+            line: None,
+            message,
+        })
+    }
+}
+
+fn line_of_offset(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}

@@ -1,0 +1,345 @@
+//! Range checks for every scene value. Limits are checked here, before anything is allocated,
+//! so an absurd scene is refused in microseconds rather than after gigabytes.
+
+use super::Scene;
+use glam::Vec3;
+
+/// The largest values a scene may ask for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Image side, pixels.
+    pub max_image_side: u32,
+    /// Shell layers.
+    pub max_shells: u32,
+    /// Shell texture side, texels.
+    pub max_texture_resolution: u32,
+    /// Strands per tile.
+    pub max_strands: u32,
+    /// Procedural mesh triangles.
+    pub max_model_resolution: u32,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            max_image_side: crate::raster::setup::MAX_DIMENSION,
+            max_shells: 256,
+            max_texture_resolution: 2048,
+            max_strands: 1_000_000,
+            max_model_resolution: 4_000_000,
+        }
+    }
+}
+
+/// A failed check: the dotted key and the message.
+pub(super) type Failure = (String, String);
+
+fn range_u32(key: &str, value: u32, min: u32, max: u32) -> Result<(), Failure> {
+    if value < min || value > max {
+        return Err((
+            key.into(),
+            format!("{key} = {value} is outside {min}..={max}"),
+        ));
+    }
+    Ok(())
+}
+
+fn range_f32(key: &str, value: f32, min: f32, max: f32) -> Result<(), Failure> {
+    if !value.is_finite() || value < min || value > max {
+        return Err((
+            key.into(),
+            format!("{key} = {value} is outside {min}..={max}"),
+        ));
+    }
+    Ok(())
+}
+
+fn positive(key: &str, value: f32) -> Result<(), Failure> {
+    if !value.is_finite() || value <= 0.0 {
+        return Err((
+            key.into(),
+            format!("{key} = {value} must be a positive number"),
+        ));
+    }
+    Ok(())
+}
+
+fn finite_vec(key: &str, v: Vec3) -> Result<(), Failure> {
+    if !v.is_finite() {
+        return Err((key.into(), format!("{key} = {v} must be finite")));
+    }
+    Ok(())
+}
+
+fn colour(key: &str, v: Vec3) -> Result<(), Failure> {
+    if !v.is_finite() || v.min_element() < 0.0 || v.max_element() > 1.0 {
+        return Err((
+            key.into(),
+            format!("{key} = {v} must have components in 0..=1"),
+        ));
+    }
+    Ok(())
+}
+
+fn nonzero(key: &str, v: Vec3) -> Result<(), Failure> {
+    finite_vec(key, v)?;
+    if v.length_squared() == 0.0 {
+        return Err((key.into(), format!("{key} must not be the zero vector")));
+    }
+    Ok(())
+}
+
+/// Checks every value of `scene` against its range and `limits`.
+pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
+    let i = &scene.image;
+    range_u32("image.width", i.width, 1, limits.max_image_side)?;
+    range_u32("image.height", i.height, 1, limits.max_image_side)?;
+    let pixels = u64::from(i.width) * u64::from(i.height);
+    if pixels > crate::raster::framebuffer::MAX_PIXELS {
+        return Err((
+            "image.width".into(),
+            format!(
+                "image.width × image.height = {pixels} pixels exceeds the limit of {}",
+                crate::raster::framebuffer::MAX_PIXELS
+            ),
+        ));
+    }
+    colour("image.background", i.background)?;
+
+    let c = &scene.camera;
+    finite_vec("camera.eye", c.eye)?;
+    finite_vec("camera.target", c.target)?;
+    nonzero("camera.up", c.up)?;
+    if (c.target - c.eye).length_squared() == 0.0 {
+        return Err((
+            "camera.target".into(),
+            "camera.target must differ from camera.eye".into(),
+        ));
+    }
+    if (c.target - c.eye).cross(c.up).length_squared() == 0.0 {
+        return Err((
+            "camera.up".into(),
+            "camera.up must not be parallel to the view direction".into(),
+        ));
+    }
+    range_f32("camera.fov_y_deg", c.fov_y_deg, 1.0, 170.0)?;
+    positive("camera.near", c.near)?;
+    if !(c.far.is_finite() && c.far > c.near) {
+        return Err((
+            "camera.far".into(),
+            format!("camera.far = {} must be greater than camera.near", c.far),
+        ));
+    }
+
+    let m = &scene.mesh;
+    positive("mesh.major_radius", m.major_radius)?;
+    positive("mesh.minor_radius", m.minor_radius)?;
+    positive("mesh.radius", m.radius)?;
+    positive("mesh.height", m.height)?;
+    positive("mesh.scale", m.scale)?;
+    range_u32(
+        "mesh.model_resolution",
+        m.model_resolution,
+        8,
+        limits.max_model_resolution,
+    )?;
+    if m.kind == super::MeshKind::Obj && m.path.is_none() {
+        return Err((
+            "mesh.kind".into(),
+            "mesh.kind = \"obj\" needs mesh.path".into(),
+        ));
+    }
+
+    let f = &scene.fur;
+    range_u32(
+        "fur.number_of_strands",
+        f.number_of_strands,
+        1,
+        limits.max_strands,
+    )?;
+    range_u32("fur.strand_resolution", f.strand_resolution, 1, 1000)?;
+    range_u32("fur.circle_resolution", f.circle_resolution, 3, 1000)?;
+    range_u32(
+        "fur.number_of_shells",
+        f.number_of_shells,
+        1,
+        limits.max_shells,
+    )?;
+    range_u32(
+        "fur.texture_resolution",
+        f.texture_resolution,
+        4,
+        limits.max_texture_resolution,
+    )?;
+    range_u32("fur.supersample", f.supersample, 1, 8)?;
+    let baked = u64::from(f.texture_resolution) * u64::from(f.supersample);
+    if baked > 8192 {
+        return Err((
+            "fur.supersample".into(),
+            format!("fur.texture_resolution × fur.supersample = {baked} exceeds 8192"),
+        ));
+    }
+    positive("fur.model_difference", f.model_difference)?;
+    for (k, v) in f.texture_repeat.iter().enumerate() {
+        range_f32(&format!("fur.texture_repeat[{k}]"), *v, 0.001, 10_000.0)?;
+    }
+    colour("fur.colour", f.colour)?;
+    range_f32("fur.colour_variation", f.colour_variation, 0.0, 1.0)?;
+    range_f32("fur.slope_deg", f.slope_deg, 0.0, 89.0)?;
+    range_f32("fur.curl", f.curl, 0.0, 1.0)?;
+    range_f32("fur.jitter", f.jitter, 0.0, 1.0)?;
+    range_f32("fur.min_height", f.min_height, 0.01, 1.0)?;
+    range_f32("fur.base_thickness", f.base_thickness, 0.0001, 0.25)?;
+    range_f32("fur.tip_thickness", f.tip_thickness, 0.0, 0.25)?;
+    positive("fur.gaussian_sigma", f.gaussian_sigma)?;
+    range_f32("fur.fin_height_scale", f.fin_height_scale, 0.1, 10.0)?;
+    for (k, w) in f.fin_windows.iter().enumerate() {
+        let key = format!("fur.fin_windows[{k}]");
+        range_f32(&key, w[0], 0.0, 360.0)?;
+        range_f32(&key, w[1], 0.0, 360.0)?;
+        if w[0] > w[1] {
+            return Err((
+                key.clone(),
+                format!("{key} = {w:?}: the first angle must not exceed the second"),
+            ));
+        }
+    }
+
+    let s = &scene.shading;
+    range_f32("shading.ambient", s.ambient, 0.0, 1.0)?;
+    range_f32("shading.banks_exponent", s.banks_exponent, 0.0, 256.0)?;
+    range_f32(
+        "shading.specular_exponent",
+        s.specular_exponent,
+        0.0,
+        4096.0,
+    )?;
+    range_f32(
+        "shading.dampened_exponent",
+        s.dampened_exponent,
+        0.0,
+        4096.0,
+    )?;
+    if !matches!(s.specular_tangents, 1 | 3) {
+        return Err((
+            "shading.specular_tangents".into(),
+            format!(
+                "shading.specular_tangents = {} must be 1 or 3",
+                s.specular_tangents
+            ),
+        ));
+    }
+    range_f32("shading.tangent_shift", s.tangent_shift, 0.0, 2.0)?;
+    range_u32("shading.shadow_divisor", s.shadow_divisor, 1, 256)?;
+    let w = &s.weights;
+    for (key, v) in [
+        ("shading.weights.ambient", w.ambient),
+        ("shading.weights.diffuse", w.diffuse),
+        ("shading.weights.specular", w.specular),
+        ("shading.weights.dampened", w.dampened),
+        ("shading.weights.shadow", w.shadow),
+    ] {
+        range_f32(key, v, 0.0, 100.0)?;
+    }
+
+    nonzero("light.direction", scene.light.direction)?;
+    range_f32("light.colour", scene.light.colour.max_element(), 0.0, 100.0)?;
+    if scene.light.colour.min_element() < 0.0 {
+        return Err((
+            "light.colour".into(),
+            "light.colour must not be negative".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Finds the 1-based line of a dotted key (`fur.number_of_shells`) by following table
+/// headers; `None` when the key is not written in the file (a default failed, or an inline
+/// table hides it).
+pub(super) fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
+    let dotted = dotted.split('[').next().unwrap_or(dotted);
+    let (table, key) = match dotted.rsplit_once('.') {
+        Some((t, k)) => (t, k),
+        None => ("", dotted),
+    };
+    let mut current = String::new();
+    let mut table_line = None;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if let Some(header) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            current = header.trim().to_string();
+            if current == table {
+                table_line = Some(n + 1);
+            }
+            continue;
+        }
+        let name = line.split('=').next().unwrap_or("").trim();
+        if current == table && name == key {
+            return Some(n + 1);
+        }
+        // `weights = { ... }` style inline tables: point at the inline table's line.
+        if let Some((parent, last)) = table.rsplit_once('.')
+            && current == parent
+            && name == last
+        {
+            return Some(n + 1);
+        }
+    }
+    table_line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Scene;
+    use std::path::Path;
+
+    fn parse(text: &str) -> Result<Scene, super::super::SceneError> {
+        Scene::parse(text, "test.toml", Path::new("."))
+    }
+
+    #[test]
+    fn empty_scene_takes_the_thesis_base_values() {
+        let s = parse("").expect("defaults are valid");
+        assert_eq!(s.fur.number_of_strands, 1000);
+        assert_eq!(s.fur.strand_resolution, 20);
+        assert_eq!(s.fur.circle_resolution, 10);
+        assert_eq!(s.fur.number_of_shells, 10);
+        assert_eq!(s.fur.texture_resolution, 128);
+        assert_eq!(s.mesh.model_resolution, 500);
+        assert_eq!(s.shading.banks_exponent, 4.8);
+    }
+
+    #[test]
+    fn out_of_range_values_name_file_line_and_key() {
+        let err =
+            parse("seed = 1\n[fur]\nnumber_of_strands = 10\nnumber_of_shells = 0\n").unwrap_err();
+        assert_eq!(err.line, Some(4));
+        assert!(
+            err.to_string()
+                .starts_with("test.toml:4: fur.number_of_shells = 0"),
+            "{err}"
+        );
+        let err = parse("[fur]\nmodel_difference = -1.0\n").unwrap_err();
+        assert!(err.to_string().contains("fur.model_difference"), "{err}");
+        let err = parse("[image]\nwidth = 100000\n").unwrap_err();
+        assert_eq!(err.line, Some(2));
+        let err = parse("[shading]\nweights = { shadow = -1.0 }\n").unwrap_err();
+        assert_eq!(err.line, Some(2), "{err}");
+        assert!(err.message.contains("shading.weights.shadow"), "{err}");
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_types_are_errors_with_lines() {
+        let err = parse("[fur]\nnumber_of_strands = 10\nnumber_of_hairs = 3\n").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.contains("number_of_hairs"), "{err}");
+        let err = parse("[camera]\neye = [1, 2]\n").unwrap_err();
+        assert_eq!(err.line, Some(2), "{err}");
+        let err = parse("[mesh]\nkind = \"teapot\"\n").unwrap_err();
+        assert!(err.message.contains("teapot"), "{err}");
+        let err = parse("[light]\ndirection = [0, 0, 0]\n").unwrap_err();
+        assert!(err.message.contains("light.direction"), "{err}");
+        let err = parse("[fur]\nmodel_difference = nan\n").unwrap_err();
+        assert!(err.message.contains("fur.model_difference"), "{err}");
+    }
+}
