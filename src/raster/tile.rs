@@ -6,7 +6,10 @@
 //! of the tile size.
 //!
 //! Interpolation (what a GPU comparison must match): with exact integer edge values `E_i` and
-//! `A = E_0 + E_1 + E_2` (twice the area), `λ_i = E_i·(1/A)` in f64, rounded to f32. Depth is
+//! `A = E_0 + E_1 + E_2` (twice the area), at the quad's first pixel `λ_i = E_i·(1/A)` in f64,
+//! rounded to f32; the other lanes add the per-pixel steps `s_x = (∂E_i/∂x·(1/A))` and
+//! `s_y` (f64, rounded to f32 once per triangle): lane 1 `λ + s_x`, lane 2 `λ + s_y`, lane 3
+//! `(λ + s_x) + s_y`. Depth is
 //! linear in screen space: `z = (λ0·z0 + λ1·z1) + λ2·z2`. Varyings are perspective-correct:
 //! `p_i = λ_i·(1/w_i)`, `b_i = p_i·(1/((p0 + p1) + p2))`, `v = (b0·v0 + b1·v1) + b2·v2`. Helper
 //! lanes (outside the triangle, shaded only for derivatives) whose extrapolated `Σp` is not
@@ -102,85 +105,99 @@ pub(crate) fn rasterize_triangle<V, F>(
         return;
     };
     let tile = target.rect;
-    let [e0, e1, e2] = tri.edges;
-    let lane_offsets: [(u32, u32); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+    let tile_width = (tile.x1 - tile.x0) as usize;
+    let edges = tri.edges;
+    // Barycentric steps per pixel, rounded to f32 once per triangle.
+    let step_x = edges.map(|e| (e.step_x as f64 * tri.inv_area) as f32);
+    let step_y = edges.map(|e| (e.step_y as f64 * tri.inv_area) as f32);
+    let inv_w = tri.inv_w.map(Vec4::splat);
+    let depth = tri.depth.map(Vec4::splat);
+    let lowest = edges.map(|e| e.step_x.min(0) + e.step_y.min(0));
+    let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
+    let x_start = r.x0 & !1;
+    let (mut shaded, mut written) = (0u64, 0u64);
     let mut quad = [varyings[0]; 4];
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
-        let row = [
-            [
-                e0.at(0, i64::from(qy)),
-                e1.at(0, i64::from(qy)),
-                e2.at(0, i64::from(qy)),
-            ],
-            [
-                e0.at(0, i64::from(qy) + 1),
-                e1.at(0, i64::from(qy) + 1),
-                e2.at(0, i64::from(qy) + 1),
-            ],
-        ];
-        for qx in ((r.x0 & !1)..r.x1).step_by(2) {
-            let mut edge = [[0i64; 3]; 4];
-            let mut mask = 0u32;
-            for (lane, &(dx, dy)) in lane_offsets.iter().enumerate() {
-                let px = i64::from(qx + dx);
-                let base = &row[dy as usize];
-                edge[lane] = [
-                    base[0] + e0.step_x * px,
-                    base[1] + e1.step_x * px,
-                    base[2] + e2.step_x * px,
-                ];
-                let inside_image = qx + dx < tile.x1 && qy + dy < tile.y1;
-                if inside_image && (edge[lane][0] | edge[lane][1] | edge[lane][2]) >= 0 {
-                    mask |= 1 << lane;
+        // Lanes 2 and 3 fall off the image when it has an odd number of rows.
+        let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
+        let mut e = edges.map(|e| e.at(i64::from(x_start), i64::from(qy)));
+        let mut qx = x_start;
+        while qx < r.x1 {
+            // The four lanes of edge k are e + {0, sx, sy, sx + sy}: their minimum and maximum
+            // decide most quads without looking at single lanes.
+            let all_in = (e[0] + lowest[0]) | (e[1] + lowest[1]) | (e[2] + lowest[2]) >= 0;
+            let mut mask = if all_in {
+                0b1111
+            } else if e[0] + highest[0] < 0 || e[1] + highest[1] < 0 || e[2] + highest[2] < 0 {
+                0
+            } else {
+                let lane_edges = |k: usize| {
+                    let (ex, ey) = (edges[k].step_x, edges[k].step_y);
+                    [e[k], e[k] + ex, e[k] + ey, e[k] + ex + ey]
+                };
+                let (a, b, c) = (lane_edges(0), lane_edges(1), lane_edges(2));
+                let mut mask = 0u32;
+                for lane in 0..4 {
+                    mask |= u32::from((a[lane] | b[lane] | c[lane]) >= 0) << lane;
                 }
+                mask
+            };
+            let columns_mask = if qx + 1 < tile.x1 { 0b1111 } else { 0b0101 };
+            mask &= rows_mask & columns_mask;
+            let origin = e;
+            for k in 0..3 {
+                e[k] += 2 * edges[k].step_x;
             }
             if mask == 0 {
+                qx += 2;
                 continue;
             }
-            let mut depth = [0.0f32; 4];
-            for lane in 0..4 {
-                let l = [
-                    ((edge[lane][0] + e0.bias) as f64 * tri.inv_area) as f32,
-                    ((edge[lane][1] + e1.bias) as f64 * tri.inv_area) as f32,
-                    ((edge[lane][2] + e2.bias) as f64 * tri.inv_area) as f32,
-                ];
-                depth[lane] = (l[0] * tri.depth[0] + l[1] * tri.depth[1]) + l[2] * tri.depth[2];
-                let p = [
-                    l[0] * tri.inv_w[0],
-                    l[1] * tri.inv_w[1],
-                    l[2] * tri.inv_w[2],
-                ];
-                let sum = (p[0] + p[1]) + p[2];
-                let b = if sum > 0.0 && sum.is_finite() {
-                    let inv = 1.0 / sum;
-                    [p[0] * inv, p[1] * inv, p[2] * inv]
-                } else {
-                    l
-                };
-                quad[lane] =
-                    V::weighted_sum(&varyings[0], b[0], &varyings[1], b[1], &varyings[2], b[2]);
+            // λ at the quad origin from the exact edge values, then f32 steps to the other lanes.
+            let l = std::array::from_fn::<Vec4, 3, _>(|k| {
+                let l0 = ((origin[k] + edges[k].bias) as f64 * tri.inv_area) as f32;
+                let right = l0 + step_x[k];
+                Vec4::new(l0, right, l0 + step_y[k], right + step_y[k])
+            });
+            let z = (l[0] * depth[0] + l[1] * depth[1]) + l[2] * depth[2];
+            let p = [l[0] * inv_w[0], l[1] * inv_w[1], l[2] * inv_w[2]];
+            let sum = (p[0] + p[1]) + p[2];
+            let perspective = sum.cmpgt(Vec4::ZERO) & sum.is_finite_mask();
+            let inv = Vec4::ONE / sum;
+            let b = [
+                Vec4::select(perspective, p[0] * inv, l[0]),
+                Vec4::select(perspective, p[1] * inv, l[1]),
+                Vec4::select(perspective, p[2] * inv, l[2]),
+            ];
+            for (lane, q) in quad.iter_mut().enumerate() {
+                *q = V::weighted_sum(
+                    &varyings[0],
+                    b[0][lane],
+                    &varyings[1],
+                    b[1][lane],
+                    &varyings[2],
+                    b[2][lane],
+                );
             }
-            for (lane, &(dx, dy)) in lane_offsets.iter().enumerate() {
+            for lane in 0..4 {
                 if mask & (1 << lane) == 0 {
                     continue;
                 }
-                let (x, y) = (qx + dx, qy + dy);
-                let index = target.index(x, y);
-                let z = depth[lane];
-                let stored = target.depth[index];
+                let (x, y) = (qx + (lane as u32 & 1), qy + (lane as u32 >> 1));
+                let index = (y - tile.y0) as usize * tile_width + (x - tile.x0) as usize;
+                let depth_z = z[lane];
                 let pass = match state.depth_compare {
                     DepthCompare::Always => true,
-                    DepthCompare::Less => z < stored,
-                    DepthCompare::LessEqual => z <= stored,
+                    DepthCompare::Less => depth_z < target.depth[index],
+                    DepthCompare::LessEqual => depth_z <= target.depth[index],
                 };
                 if !pass {
                     continue;
                 }
-                stats.fragments_shaded += 1;
+                shaded += 1;
                 let fragment = Fragment {
                     x,
                     y,
-                    depth: z,
+                    depth: depth_z,
                     front_facing: tri.front_facing,
                     lane,
                     quad: &quad,
@@ -188,15 +205,18 @@ pub(crate) fn rasterize_triangle<V, F>(
                 let Some(colour) = shader(&fragment) else {
                     continue;
                 };
-                stats.fragments_written += 1;
+                written += 1;
                 if state.depth_write {
-                    target.depth[index] = z;
+                    target.depth[index] = depth_z;
                 }
                 let dst = &mut target.colour[index];
                 *dst = blend(state.blend, colour, *dst);
             }
+            qx += 2;
         }
     }
+    stats.fragments_shaded += shaded;
+    stats.fragments_written += written;
 }
 
 /// The blend equation. `Alpha` is `src·a + dst·(1 − a)` on all four channels with `a` the
