@@ -1,5 +1,6 @@
 //! The shading terms of the thesis (3.2–3.4) as small pure functions.
 
+pub mod burn;
 mod numeric;
 #[cfg(test)]
 mod test_support;
@@ -10,7 +11,9 @@ pub mod projection;
 pub mod shadow;
 pub mod spots;
 pub mod tangent_space;
+pub mod wind;
 
+pub use burn::{BURN_THRESHOLD, BurnOutcome, BurnSchedule, burn_exponent, burn_rule};
 pub use kajiya_kay::{
     BANKS_EXPONENT, SpecularTangents, kajiya_kay_diffuse, kajiya_kay_specular, shift_tangent,
     specular_with_tangents,
@@ -26,3 +29,6 @@ pub use spots::{
     stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
+pub use wind::{
+    VIBRATION_RATIO, WindParams, bend_tangent, wind_displacement, wind_force, wind_uv_offset,
+};
