@@ -1,0 +1,250 @@
+//! Kajiya–Kay strand lighting (thesis eq. 2.5 and 2.7, section 3.2.3): diffuse from the sine
+//! between tangent and light, raised to Banks's exponent; specular from the reflection cone,
+//! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
+
+use super::numeric::{finite_or_zero, pow01};
+use super::tangent_space::cos_sin_unit;
+use glam::Vec3;
+
+/// Banks's exponent on the Kajiya–Kay diffuse term, 4.8 (thesis 3.2.3: "the dampening is done
+/// by exponentiating the diffuse value by 4.8 as stated by Banks").
+pub const BANKS_EXPONENT: f32 = 4.8;
+
+/// Kajiya–Kay diffuse, thesis eq. 2.5 (`ψ_diffuse = k_d sin(t, l)`), raised to Banks's exponent
+/// (3.2.3): `sin(t, l)^p`, in `[0, 1]`.
+///
+/// Inputs need not be unit (normalised inside). A tangent parallel to the light gives 0; a zero
+/// or NaN vector gives `0^p` (0 for `p > 0`). Exponent convention: NaN acts as 1, negative as 0.
+#[inline]
+pub fn kajiya_kay_diffuse(tangent: Vec3, light: Vec3, banks_exponent: f32) -> f32 {
+    let (_, s) = cos_sin_unit(tangent.normalize_or_zero(), light.normalize_or_zero());
+    pow01(s, banks_exponent)
+}
+
+/// Kajiya–Kay specular, thesis eq. 2.7:
+/// `max(0, (t·l)(t·e) + sin(t, l)·sin(t, e))^p`, in `[0, 1]`.
+///
+/// The sign convention follows the thesis's equation as printed (a `+` between the two
+/// products, with `l` and `e` both pointing away from the surface point); Kajiya and Kay's own
+/// derivation via `cos(θ − θ')` (eq. 2.6) would differ in the sign of the first product.
+/// Inputs are normalised inside; a zero or NaN vector makes its products 0, so the result is
+/// `0^p`. The exponent convention is that of [`kajiya_kay_diffuse`].
+#[inline]
+pub fn kajiya_kay_specular(tangent: Vec3, light: Vec3, eye: Vec3, exponent: f32) -> f32 {
+    specular_unit(
+        tangent.normalize_or_zero(),
+        light.normalize_or_zero(),
+        eye.normalize_or_zero(),
+        exponent,
+    )
+}
+
+/// Eq. 2.7 on vectors already unit (or zero).
+#[inline]
+fn specular_unit(t: Vec3, l: Vec3, e: Vec3, exponent: f32) -> f32 {
+    let (cl, sl) = cos_sin_unit(t, l);
+    let (ce, se) = cos_sin_unit(t, e);
+    pow01(cl * ce + sl * se, exponent)
+}
+
+/// How many tangents the specular term of eq. 3.5 uses (thesis table 4.4: 1 or 3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpecularTangents {
+    /// The strand tangent alone.
+    #[default]
+    One,
+    /// The strand tangent and two copies shifted along the normal, back and forth
+    /// (Scheuermann).
+    Three,
+}
+
+/// Scheuermann's shifted tangent (thesis 3.2.3, eq. 3.5): `normalize(t + shift·n)`.
+///
+/// Expects unit `tangent` and `normal`; returns a unit vector, or zero when `t + shift·n` has
+/// no direction (e.g. `t = −n`, `shift = 1`) or is not finite. A non-finite `shift` acts as 0.
+#[inline]
+pub fn shift_tangent(tangent: Vec3, normal: Vec3, shift: f32) -> Vec3 {
+    (tangent + finite_or_zero(shift) * normal).normalize_or_zero()
+}
+
+/// The specular term with one or three tangents (thesis 3.2.3, eq. 3.5).
+///
+/// With [`SpecularTangents::One`] it is [`kajiya_kay_specular`]. With
+/// [`SpecularTangents::Three`] it is the **mean** of the speculars of `t`,
+/// `shift_tangent(t, n, +shift)` and `shift_tangent(t, n, −shift)`. The thesis says "the sum";
+/// we average so the term stays in `[0, 1]` like the others of eq. 3.7 and its weight keeps
+/// the same meaning for one or three tangents. The three are summed in that fixed order.
+#[inline]
+pub fn specular_with_tangents(
+    tangent: Vec3,
+    normal: Vec3,
+    light: Vec3,
+    eye: Vec3,
+    exponent: f32,
+    tangents: SpecularTangents,
+    shift: f32,
+) -> f32 {
+    let t = tangent.normalize_or_zero();
+    let l = light.normalize_or_zero();
+    let e = eye.normalize_or_zero();
+    let centre = specular_unit(t, l, e, exponent);
+    match tangents {
+        SpecularTangents::One => centre,
+        SpecularTangents::Three => {
+            let n = normal.normalize_or_zero();
+            let up = specular_unit(shift_tangent(t, n, shift), l, e, exponent);
+            let down = specular_unit(shift_tangent(t, n, -shift), l, e, exponent);
+            (centre + up + down) / 3.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::tangent_space::tests::{sin_tol, sin64};
+    use crate::shading::test_support::{Lcg, assert_close};
+
+    /// f64 eq. 2.7 before the power: `(t·l)(t·e) + sin(t,l) sin(t,e)` with sines from cross
+    /// products. Returns the base and its error bound (sum of the sine bounds plus 1e-6).
+    fn spec_base64(t: Vec3, l: Vec3, e: Vec3) -> (f64, f64) {
+        let (t, l, e) = (t.as_dvec3(), l.as_dvec3(), e.as_dvec3());
+        let (t, l, e) = (t.normalize(), l.normalize(), e.normalize());
+        let (sl, se) = (
+            sin64(t.as_vec3(), l.as_vec3()),
+            sin64(t.as_vec3(), e.as_vec3()),
+        );
+        (
+            t.dot(l) * t.dot(e) + sl * se,
+            1e-6 + sin_tol(sl) + sin_tol(se),
+        )
+    }
+
+    /// Error bound after `max(0, x)^p`: `p·max(x,0)^(p−1)·dx` (+ 1e-6), exact up to first order.
+    fn pow_tol(x: f64, dx: f64, p: f64) -> f64 {
+        let x = x.clamp(0.0, 1.0);
+        1e-6 + p * (x + dx).min(1.0).powf((p - 1.0).max(0.0)) * dx
+    }
+
+    #[test]
+    fn diffuse_matches_f64() {
+        let mut rng = Lcg::new(10);
+        for _ in 0..2000 {
+            let (t, l) = (rng.cube(), rng.cube());
+            let p = rng.range(1.0, 8.0);
+            let s = sin64(t, l);
+            let expected = s.powf(f64::from(p));
+            let tol = pow_tol(s, sin_tol(s), f64::from(p));
+            assert_close(kajiya_kay_diffuse(t, l, p), expected, tol, "diffuse");
+        }
+    }
+
+    #[test]
+    fn diffuse_edge_cases() {
+        // Tangent parallel (or antiparallel) to the light: no diffuse.
+        assert_eq!(
+            kajiya_kay_diffuse(Vec3::Y, Vec3::Y * 2.0, BANKS_EXPONENT),
+            0.0
+        );
+        assert_eq!(kajiya_kay_diffuse(Vec3::Y, -Vec3::Y, BANKS_EXPONENT), 0.0);
+        // Perpendicular: full diffuse.
+        assert_eq!(kajiya_kay_diffuse(Vec3::X, Vec3::Y, BANKS_EXPONENT), 1.0);
+        // Degenerate vectors: finite, zero.
+        assert_eq!(kajiya_kay_diffuse(Vec3::ZERO, Vec3::Y, BANKS_EXPONENT), 0.0);
+        let nan = Vec3::splat(f32::NAN);
+        assert_eq!(kajiya_kay_diffuse(nan, Vec3::Y, BANKS_EXPONENT), 0.0);
+        // Exponent conventions.
+        let s = kajiya_kay_diffuse(Vec3::new(1.0, 1.0, 0.0), Vec3::X, f32::NAN);
+        assert_close(s, 0.5f64.sqrt(), 1e-6, "NaN exponent acts as 1");
+        assert_eq!(kajiya_kay_diffuse(Vec3::X, Vec3::X, -1.0), 1.0);
+    }
+
+    #[test]
+    fn specular_matches_f64() {
+        let mut rng = Lcg::new(11);
+        for _ in 0..2000 {
+            let (t, l, e) = (rng.cube(), rng.cube(), rng.cube());
+            let p = rng.range(1.0, 64.0);
+            let (x, dx) = spec_base64(t, l, e);
+            let expected = x.max(0.0).powf(f64::from(p));
+            let tol = pow_tol(x, dx, f64::from(p));
+            assert_close(kajiya_kay_specular(t, l, e, p), expected, tol, "specular");
+        }
+    }
+
+    #[test]
+    fn specular_edge_cases() {
+        // Mirror configuration of the printed eq. 2.7: l = e gives (t·l)² + sin² = 1.
+        let t = Vec3::new(0.3, 0.9, 0.1);
+        let l = Vec3::new(-0.2, 0.5, 0.8);
+        assert_close(kajiya_kay_specular(t, l, l, 40.0), 1.0, 1e-5, "l = e");
+        // Eye behind the surface (normal +z, eye −z): finite and in range.
+        let behind = kajiya_kay_specular(Vec3::X, Vec3::new(0.0, 0.6, 0.8), -Vec3::Z, 20.0);
+        assert!((0.0..=1.0).contains(&behind));
+        // Negative base clamps to 0: t·l = 1, t·e = −1, sines 0.
+        assert_eq!(kajiya_kay_specular(Vec3::X, Vec3::X, -Vec3::X, 8.0), 0.0);
+        // Degenerate inputs.
+        for bad in [
+            Vec3::ZERO,
+            Vec3::splat(f32::NAN),
+            Vec3::splat(f32::INFINITY),
+        ] {
+            assert_eq!(kajiya_kay_specular(bad, Vec3::Y, Vec3::Z, 8.0), 0.0);
+            assert_eq!(kajiya_kay_specular(Vec3::X, bad, Vec3::Z, 8.0), 0.0);
+            assert_eq!(kajiya_kay_specular(Vec3::X, Vec3::Y, bad, 8.0), 0.0);
+        }
+    }
+
+    #[test]
+    fn shifted_tangents_match_f64_mean() {
+        let mut rng = Lcg::new(12);
+        for _ in 0..1000 {
+            let n = rng.direction();
+            let t = (rng.direction() - n * 0.3).normalize_or(Vec3::X);
+            let (l, e) = (rng.cube(), rng.cube());
+            let (p, shift) = (rng.range(1.0, 32.0), rng.range(-0.5, 0.5));
+            let one = specular_with_tangents(t, n, l, e, p, SpecularTangents::One, shift);
+            assert_eq!(one, kajiya_kay_specular(t, l, e, p));
+            let mut mean = 0.0;
+            let mut tol = 0.0;
+            for s in [0.0, f64::from(shift), -f64::from(shift)] {
+                let ts = (t.as_dvec3() + s * n.as_dvec3()).normalize().as_vec3();
+                let (x, dx) = spec_base64(ts, l, e);
+                mean += x.max(0.0).powf(f64::from(p)) / 3.0;
+                // The shifted tangent itself carries ~1e-7 error, which moves x by < 1e-6.
+                tol += pow_tol(x, dx + 1e-6, f64::from(p)) / 3.0;
+            }
+            let three = specular_with_tangents(t, n, l, e, p, SpecularTangents::Three, shift);
+            assert_close(three, mean, tol, "three-tangent specular");
+        }
+    }
+
+    #[test]
+    fn shift_tangent_matches_f64_and_degenerates() {
+        let mut rng = Lcg::new(13);
+        for _ in 0..500 {
+            let (t, n, s) = (rng.direction(), rng.direction(), rng.range(-1.0, 1.0));
+            let got = shift_tangent(t, n, s);
+            let sum = t.as_dvec3() + f64::from(s) * n.as_dvec3();
+            if sum.length() < 1e-3 {
+                continue;
+            }
+            let expected = sum.normalize();
+            for k in 0..3 {
+                assert_close(got[k], expected[k], 1e-6 / sum.length(), "shift_tangent");
+            }
+        }
+        assert_eq!(shift_tangent(Vec3::X, -Vec3::X, 1.0), Vec3::ZERO);
+        assert_eq!(shift_tangent(Vec3::X, Vec3::Y, f32::NAN), Vec3::X);
+        let v = specular_with_tangents(
+            Vec3::X,
+            -Vec3::X,
+            Vec3::Y,
+            Vec3::Y,
+            4.0,
+            SpecularTangents::Three,
+            1.0,
+        );
+        assert!((0.0..=1.0).contains(&v));
+    }
+}

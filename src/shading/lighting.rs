@@ -1,0 +1,222 @@
+//! The lighting combination of thesis 3.2.3: dampened specular and the final colour, eq. 3.7,
+//! with one user weight per term.
+
+use super::numeric::saturate;
+use glam::Vec3;
+
+/// Specular values strictly above this become [`DAMPENED_SPECULAR_MAX`] (thesis 3.2.3).
+pub const DAMPENING_THRESHOLD: f32 = 0.6;
+
+/// The largest dampened specular, 0.3 (thesis 3.2.3: "fixing the values over 0.6 to 0.3").
+pub const DAMPENED_SPECULAR_MAX: f32 = 0.3;
+
+/// Dampened specular (thesis 3.2.3, the `ψ_dampenedspecularity` of eq. 3.6 and 3.7): values
+/// over 0.6 become 0.3; from 0 to 0.6 a linear gradient from 0 to 0.3, i.e. `0.5·s`.
+///
+/// The two branches meet exactly: `0.5 · 0.6_f32 == 0.3_f32` (halving is exact), so the
+/// function is continuous and monotone. Negative and NaN inputs give 0; `+inf` gives 0.3.
+#[inline]
+pub fn dampened_specular(s: f32) -> f32 {
+    if s > DAMPENING_THRESHOLD {
+        DAMPENED_SPECULAR_MAX
+    } else if s > 0.0 {
+        0.5 * s
+    } else {
+        0.0
+    }
+}
+
+/// The user weights of eq. 3.7 (thesis 3.2.3: "we multiply each of these by a user defined
+/// value").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingWeights {
+    /// Weight of `ψ_ambient`.
+    pub ambient: f32,
+    /// Weight of `ψ_diffuse` (inside the strand-colour product).
+    pub diffuse: f32,
+    /// Weight of `ψ_specularity` (inside the strand-colour product).
+    pub specular: f32,
+    /// Weight of `ψ_dampenedspecularity`.
+    pub dampened: f32,
+    /// Weight of `ψ_shadow`, subtracted.
+    pub shadow: f32,
+}
+
+/// Default weight of the shadow term, 0.08.
+///
+/// The raw shadow of [`crate::shading::shell_shadow`] is a count of opaque lookups: up to
+/// `m = (N − i)/n` (6 at the bottom layer of the thesis's 30 shells with `height/5`; the thesis
+/// gives its shadow range as `[0, −5]`). With weight 1 a single opaque lookup would already
+/// black out a fully lit strand. 0.08 maps 6 opaque lookups to a darkening of 0.48: the
+/// root is about half as bright as the tip, dark but never black, and one lookup costs 0.08.
+pub const DEFAULT_SHADOW_WEIGHT: f32 = 0.08;
+
+impl Default for ShadingWeights {
+    /// All weights 1, except `shadow` = [`DEFAULT_SHADOW_WEIGHT`].
+    fn default() -> Self {
+        ShadingWeights {
+            ambient: 1.0,
+            diffuse: 1.0,
+            specular: 1.0,
+            dampened: 1.0,
+            shadow: DEFAULT_SHADOW_WEIGHT,
+        }
+    }
+}
+
+/// Final colour, thesis eq. 3.7:
+/// `ψ_final = ψ_ambient + strandColor·(ψ_diffuse + ψ_specularity) + ψ_dampenedspecularity − ψ_shadow`,
+/// each term scaled by its weight, per channel:
+///
+/// `w_a·ambient·strand + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow`,
+/// then each channel clamped to `[0, 1]`.
+///
+/// Choices where the thesis is open: `ψ_ambient = ambient × strandColour` (an ambient light of
+/// level `ambient` reflected by the strand); the light colour multiplies the lit terms and the
+/// dampened specular (a white highlight under a white light), not the ambient or the shadow.
+/// The sum is evaluated left to right in the order written above; a NaN channel becomes 0.
+#[allow(clippy::too_many_arguments)] // one argument per term of eq. 3.7, in its order
+#[inline]
+pub fn final_colour(
+    strand_colour: Vec3,
+    light_colour: Vec3,
+    ambient: f32,
+    diffuse: f32,
+    specular: f32,
+    dampened: f32,
+    shadow: f32,
+    weights: &ShadingWeights,
+) -> Vec3 {
+    let lit = weights.diffuse * diffuse + weights.specular * specular;
+    let highlight = weights.dampened * dampened;
+    let dark = weights.shadow * shadow;
+    let channel = |s: f32, l: f32| {
+        saturate(weights.ambient * ambient * s + s * l * lit + l * highlight - dark)
+    };
+    Vec3::new(
+        channel(strand_colour.x, light_colour.x),
+        channel(strand_colour.y, light_colour.y),
+        channel(strand_colour.z, light_colour.z),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::test_support::{Lcg, assert_close};
+
+    #[test]
+    fn dampening_matches_definition_and_boundary() {
+        let below = f32::from_bits(DAMPENING_THRESHOLD.to_bits() - 1);
+        let above = f32::from_bits(DAMPENING_THRESHOLD.to_bits() + 1);
+        assert_eq!(dampened_specular(DAMPENING_THRESHOLD), 0.3);
+        assert_eq!(dampened_specular(above), 0.3);
+        assert!(dampened_specular(below) < 0.3);
+        assert_close(
+            dampened_specular(below),
+            0.5 * f64::from(below),
+            1e-9,
+            "0.6−",
+        );
+        assert_eq!(dampened_specular(0.0), 0.0);
+        assert_eq!(dampened_specular(-0.5), 0.0);
+        assert_eq!(dampened_specular(f32::NAN), 0.0);
+        assert_eq!(dampened_specular(f32::INFINITY), 0.3);
+        assert_eq!(dampened_specular(1.0), 0.3);
+        let mut rng = Lcg::new(20);
+        for _ in 0..1000 {
+            let s = rng.range(-0.2, 1.2);
+            let s64 = f64::from(s);
+            let expected = if s64 > 0.6f32 as f64 {
+                0.3f32 as f64
+            } else {
+                (0.5 * s64).max(0.0)
+            };
+            // Halving is exact: the bound is 0.
+            assert_close(dampened_specular(s), expected, 0.0, "dampened");
+        }
+    }
+
+    #[test]
+    fn default_weights() {
+        let w = ShadingWeights::default();
+        assert_eq!(
+            (w.ambient, w.diffuse, w.specular, w.dampened),
+            (1.0, 1.0, 1.0, 1.0)
+        );
+        assert_eq!(w.shadow, 0.08);
+        // Six opaque lookups over a fully lit white strand leave it visible.
+        let c = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 1.0, 0.0, 0.0, 6.0, &w);
+        assert!(c.x > 0.5);
+    }
+
+    #[test]
+    fn final_colour_matches_f64() {
+        // Bound: 1e-6 absolute (a handful of products of values ≤ 2).
+        let mut rng = Lcg::new(21);
+        for _ in 0..2000 {
+            let strand = Vec3::new(rng.unit(), rng.unit(), rng.unit());
+            let light = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 1.5;
+            let (a, d, s, p, sh) = (
+                rng.unit(),
+                rng.unit(),
+                rng.unit(),
+                rng.range(0.0, 0.3),
+                rng.range(0.0, 6.0),
+            );
+            let w = ShadingWeights {
+                ambient: rng.unit(),
+                diffuse: rng.unit(),
+                specular: rng.unit(),
+                dampened: rng.unit(),
+                shadow: rng.range(0.0, 0.2),
+            };
+            let got = final_colour(strand, light, a, d, s, p, sh, &w);
+            for k in 0..3 {
+                let (sc, lc) = (f64::from(strand[k]), f64::from(light[k]));
+                let f = |x: f32| f64::from(x);
+                let expected = (f(w.ambient) * f(a) * sc
+                    + sc * lc * (f(w.diffuse) * f(d) + f(w.specular) * f(s))
+                    + lc * f(w.dampened) * f(p)
+                    - f(w.shadow) * f(sh))
+                .clamp(0.0, 1.0);
+                assert_close(got[k], expected, 1e-6, "final colour");
+            }
+        }
+    }
+
+    #[test]
+    fn final_colour_clamps_and_survives_nan() {
+        let w = ShadingWeights::default();
+        let bright = final_colour(Vec3::ONE, Vec3::ONE, 1.0, 1.0, 1.0, 0.3, 0.0, &w);
+        assert_eq!(bright, Vec3::ONE);
+        let black = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 0.0, 0.0, 0.0, 100.0, &w);
+        assert_eq!(black, Vec3::ZERO);
+        let nan = final_colour(
+            Vec3::splat(f32::NAN),
+            Vec3::ONE,
+            1.0,
+            1.0,
+            1.0,
+            0.3,
+            0.0,
+            &w,
+        );
+        assert_eq!(nan, Vec3::ZERO);
+        let inf = final_colour(Vec3::ONE, Vec3::ONE, f32::INFINITY, 0.0, 0.0, 0.0, 0.0, &w);
+        assert_eq!(inf, Vec3::ONE);
+        // Ambient alone: ambient × strand colour.
+        let amb = final_colour(
+            Vec3::new(0.5, 0.2, 0.1),
+            Vec3::ONE,
+            0.4,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            &w,
+        );
+        assert_close(amb.x, 0.2, 1e-7, "ambient r");
+        assert_close(amb.y, 0.08, 1e-7, "ambient g");
+    }
+}

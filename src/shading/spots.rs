@@ -1,0 +1,263 @@
+//! Spots and stripes (thesis 3.2.4): a weight in `[0, 1]` per spot, full inside an inner region,
+//! a smooth gradient over an outer ring, zero outside; the spot colour is blended over the fur
+//! colour with that weight, and the result is eq. 3.7's `strandColor`.
+//!
+//! Gradient choice: every ring uses the Hermite smoothstep `t²(3 − 2t)` of the linear ring
+//! coordinate `t` (0 at the outer edge, 1 at the inner edge), so the colour has no visible
+//! crease (Mach band) at either edge.
+
+use super::numeric::{finite_or_zero, pow01, ramp, saturate};
+use glam::Vec3;
+
+/// Geometric spot (thesis 3.2.4, "an ellipsoid function"): with the ellipsoid distance
+/// `d = sqrt(Σ((p − c)/r)²)`, the weight is 1 for `d ≤ inner`, 0 for `d ≥ 1`, and
+/// `smoothstep((1 − d)/(1 − inner))` between.
+///
+/// `inner` is clamped to `[0, 1]` (NaN → 0; `inner = 1` gives a hard edge, inside winning at
+/// `d = 1`). Radii are taken as `|r|`; a zero or NaN radius makes the ellipsoid empty (weight
+/// 0). A NaN or infinite distance gives 0.
+#[inline]
+pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f32) -> f32 {
+    let r = radii.abs();
+    if !(r.x > 0.0 && r.y > 0.0 && r.z > 0.0) {
+        return 0.0;
+    }
+    let d = ((point - centre) / r).length();
+    ramp(-d, -1.0, -saturate(inner))
+}
+
+/// Light-based spot lobe (thesis 3.2.4: "we use the specular value to add spots", the light
+/// being fixed to the object): `max(0, n̂·l̂)^exponent`, in `[0, 1]`.
+///
+/// `normal` and `spot_light_dir` (towards the spot light, in the object's frame) are
+/// normalised inside; a zero or NaN vector gives `0^p`. Exponent convention: NaN acts as 1,
+/// negative as 0. Map the lobe to a colour weight with [`spot_gradient`].
+#[inline]
+pub fn light_spot_intensity(normal: Vec3, spot_light_dir: Vec3, exponent: f32) -> f32 {
+    pow01(
+        normal
+            .normalize_or_zero()
+            .dot(spot_light_dir.normalize_or_zero()),
+        exponent,
+    )
+}
+
+/// Inner circle / ring / outside of a light-based spot (thesis 3.2.4: "in the inner circle the
+/// full color of the predefined spot is given, and in the outer region we add a gradient"):
+/// 1 for `intensity ≥ inner_threshold`, 0 for `intensity ≤ outer_threshold`,
+/// `smoothstep((I − outer)/(inner − outer))` between.
+///
+/// Expects `outer_threshold < inner_threshold`; otherwise it is a step at `inner_threshold`
+/// (1 at or above it). NaN intensity gives 0.
+#[inline]
+pub fn spot_gradient(intensity: f32, inner_threshold: f32, outer_threshold: f32) -> f32 {
+    ramp(intensity, outer_threshold, inner_threshold)
+}
+
+/// Blends a spot over the fur colour: `fur·(1 − w) + spot·w` with `w = saturate(weight)`
+/// (NaN → 0, so the fur colour is kept). Weight 0 returns `fur_colour` exactly, weight 1
+/// `spot_colour` exactly.
+#[inline]
+pub fn apply_spot(fur_colour: Vec3, spot_colour: Vec3, weight: f32) -> Vec3 {
+    let w = saturate(weight);
+    fur_colour * (1.0 - w) + spot_colour * w
+}
+
+/// Several spots in a fixed order: each `(colour, weight)` is applied with [`apply_spot`] over
+/// the result of the previous ones, so a later spot covers an earlier one where both apply.
+#[inline]
+pub fn apply_spots(fur_colour: Vec3, spots: impl IntoIterator<Item = (Vec3, f32)>) -> Vec3 {
+    spots
+        .into_iter()
+        .fold(fur_colour, |c, (spot, w)| apply_spot(c, spot, w))
+}
+
+/// Stripes (thesis 3.2.4, the cow of figure 3.14): periodic bands along a coordinate (e.g. a
+/// texture coordinate or a world axis), centred on every multiple of `period`.
+///
+/// With `dist` the distance from `coordinate` to the nearest band centre
+/// (`|x − period·round(x/period)|`, in `[0, period/2]`): 1 for `dist ≤ width/2`, 0 for
+/// `dist ≥ width/2 + softness`, smoothstep between. `width` and `softness` are clamped to be
+/// non-negative (NaN → 0; softness 0 gives hard edges). A non-positive or non-finite `period`,
+/// or a non-finite coordinate, gives 0.
+#[inline]
+pub fn stripe_intensity(coordinate: f32, period: f32, width: f32, softness: f32) -> f32 {
+    if !(period > 0.0 && period.is_finite() && coordinate.is_finite()) {
+        return 0.0;
+    }
+    let cell = coordinate / period;
+    let dist = (cell - libm::roundf(cell)).abs() * period;
+    let half = 0.5 * finite_or_zero(width).max(0.0);
+    let soft = finite_or_zero(softness).max(0.0);
+    ramp(-dist, -(half + soft), -half)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::test_support::{Lcg, assert_close};
+
+    fn smooth64(t: f64) -> f64 {
+        let t = t.clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    }
+
+    #[test]
+    fn ellipsoid_matches_f64_inside_ring_outside() {
+        // Bound: 1e-6 + 1.5/(1 − inner)·1e-6·(1 + d): the smoothstep's slope times the error of d.
+        let mut rng = Lcg::new(50);
+        let (mut inside, mut ring, mut outside) = (0, 0, 0);
+        for _ in 0..3000 {
+            let c = rng.cube();
+            let r = Vec3::new(
+                rng.range(0.2, 2.0),
+                rng.range(0.2, 2.0),
+                rng.range(0.2, 2.0),
+            );
+            let p = c + rng.cube() * r;
+            let inner = rng.range(0.0, 0.9);
+            let q = (p.as_dvec3() - c.as_dvec3()) / r.as_dvec3();
+            let d = q.length();
+            let expected = if d <= f64::from(inner) {
+                inside += 1;
+                1.0
+            } else if d >= 1.0 {
+                outside += 1;
+                0.0
+            } else {
+                ring += 1;
+                smooth64((1.0 - d) / (1.0 - f64::from(inner)))
+            };
+            let tol = 1e-6 + 1.5 / (1.0 - f64::from(inner)) * 1e-6 * (1.0 + d);
+            let got = ellipsoid_spot_intensity(p, c, r, inner);
+            assert_close(got, expected, tol, "ellipsoid");
+        }
+        assert!(inside > 100 && ring > 100 && outside > 100);
+    }
+
+    #[test]
+    fn ellipsoid_edges() {
+        let r = Vec3::new(2.0, 1.0, 0.5);
+        assert_eq!(
+            ellipsoid_spot_intensity(Vec3::ZERO, Vec3::ZERO, r, 0.5),
+            1.0
+        );
+        assert_eq!(ellipsoid_spot_intensity(Vec3::X, Vec3::ZERO, r, 0.5), 1.0); // d = 0.5
+        assert_eq!(ellipsoid_spot_intensity(Vec3::Y, Vec3::ZERO, r, 0.5), 0.0); // d = 1
+        assert_eq!(ellipsoid_spot_intensity(Vec3::Z, Vec3::ZERO, r, 0.5), 0.0); // d = 2
+        // Mid-ring: d = 0.75, t = 0.5, smoothstep 0.5.
+        let mid = ellipsoid_spot_intensity(Vec3::X * 1.5, Vec3::ZERO, r, 0.5);
+        assert_eq!(mid, 0.5);
+        // Hard edge with inner = 1: inside wins at d = 1.
+        assert_eq!(ellipsoid_spot_intensity(Vec3::Y, Vec3::ZERO, r, 1.0), 1.0);
+        assert_eq!(
+            ellipsoid_spot_intensity(Vec3::Y * 1.01, Vec3::ZERO, r, 1.0),
+            0.0
+        );
+        // Negative radii act as their absolute value; zero or NaN radii give an empty spot.
+        assert_eq!(ellipsoid_spot_intensity(Vec3::X, Vec3::ZERO, -r, 0.5), 1.0);
+        assert_eq!(
+            ellipsoid_spot_intensity(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.5),
+            0.0
+        );
+        let nan = Vec3::splat(f32::NAN);
+        assert_eq!(
+            ellipsoid_spot_intensity(Vec3::ZERO, Vec3::ZERO, nan, 0.5),
+            0.0
+        );
+        assert_eq!(ellipsoid_spot_intensity(nan, Vec3::ZERO, r, 0.5), 0.0);
+        assert_eq!(
+            ellipsoid_spot_intensity(Vec3::ZERO, Vec3::ZERO, r, f32::NAN),
+            1.0
+        );
+        let far = Vec3::splat(f32::MAX);
+        assert_eq!(ellipsoid_spot_intensity(far, Vec3::ZERO, r, 0.5), 0.0);
+    }
+
+    #[test]
+    fn light_spot_matches_f64() {
+        let mut rng = Lcg::new(51);
+        for _ in 0..2000 {
+            let (n, l, p) = (rng.cube(), rng.cube(), rng.range(1.0, 64.0));
+            let c = n.as_dvec3().normalize().dot(l.as_dvec3().normalize());
+            let expected = c.max(0.0).powf(f64::from(p));
+            // p·c^(p−1)·1e-6 + 1e-6 (the cosine carries a few ULP).
+            let tol = 1e-6 + f64::from(p) * 1e-6;
+            assert_close(light_spot_intensity(n, l, p), expected, tol, "light spot");
+        }
+        assert_eq!(light_spot_intensity(Vec3::Y, -Vec3::Y, 4.0), 0.0);
+        assert_eq!(light_spot_intensity(Vec3::Y, Vec3::Y * 5.0, 4.0), 1.0);
+        assert_eq!(light_spot_intensity(Vec3::ZERO, Vec3::Y, 4.0), 0.0);
+        assert_eq!(
+            light_spot_intensity(Vec3::splat(f32::NAN), Vec3::Y, 4.0),
+            0.0
+        );
+    }
+
+    #[test]
+    fn gradient_and_blending() {
+        assert_eq!(spot_gradient(0.9, 0.8, 0.4), 1.0);
+        assert_eq!(spot_gradient(0.8, 0.8, 0.4), 1.0);
+        assert_eq!(spot_gradient(0.4, 0.8, 0.4), 0.0);
+        assert_eq!(spot_gradient(0.1, 0.8, 0.4), 0.0);
+        assert_close(spot_gradient(0.6, 0.8, 0.4), 0.5, 1e-6, "mid-ring");
+        assert_eq!(spot_gradient(f32::NAN, 0.8, 0.4), 0.0);
+        // Reversed thresholds: a step at the inner one.
+        assert_eq!(spot_gradient(0.5, 0.5, 0.9), 1.0);
+        assert_eq!(spot_gradient(0.49, 0.5, 0.9), 0.0);
+        let mut rng = Lcg::new(52);
+        for _ in 0..1000 {
+            let i = rng.unit();
+            let t = (f64::from(i) - 0.3) / 0.4;
+            assert_close(spot_gradient(i, 0.7, 0.3), smooth64(t), 1e-5, "gradient");
+        }
+        let (fur, spot) = (Vec3::new(0.4, 0.25, 0.1), Vec3::new(1.0, 0.9, 0.8));
+        assert_eq!(apply_spot(fur, spot, 0.0), fur);
+        assert_eq!(apply_spot(fur, spot, 1.0), spot);
+        assert_eq!(apply_spot(fur, spot, 2.0), spot);
+        assert_eq!(apply_spot(fur, spot, f32::NAN), fur);
+        let half = apply_spot(fur, spot, 0.5);
+        assert_close(half.x, 0.7, 1e-7, "lerp");
+        // Later spots cover earlier ones.
+        let white = Vec3::ONE;
+        assert_eq!(apply_spots(fur, [(spot, 1.0), (white, 1.0)]), white);
+        assert_eq!(apply_spots(fur, [(white, 1.0), (spot, 1.0)]), spot);
+        assert_eq!(apply_spots(fur, [(white, 1.0), (spot, 0.0)]), white);
+        assert_eq!(apply_spots(fur, []), fur);
+    }
+
+    #[test]
+    fn stripes_match_f64() {
+        let mut rng = Lcg::new(53);
+        for _ in 0..3000 {
+            let x = rng.range(-10.0, 10.0);
+            let period = rng.range(0.5, 3.0);
+            let width = rng.range(0.0, period);
+            let soft = rng.range(0.05, 0.5);
+            let (xd, pd) = (f64::from(x), f64::from(period));
+            let cell = xd / pd;
+            let dist = (cell - cell.round()).abs() * pd;
+            let half = 0.5 * f64::from(width);
+            let expected = smooth64((half + f64::from(soft) - dist) / f64::from(soft));
+            let tol = 1e-6 + 1.5 / f64::from(soft) * 2e-6 * (1.0 + xd.abs());
+            let got = stripe_intensity(x, period, width, soft);
+            assert_close(got, expected, tol, "stripe");
+        }
+    }
+
+    #[test]
+    fn stripe_edges() {
+        assert_eq!(stripe_intensity(0.0, 1.0, 0.2, 0.1), 1.0);
+        assert_eq!(stripe_intensity(3.0, 1.0, 0.2, 0.1), 1.0);
+        assert_eq!(stripe_intensity(-2.05, 1.0, 0.2, 0.1), 1.0);
+        assert_eq!(stripe_intensity(0.5, 1.0, 0.2, 0.1), 0.0);
+        assert_eq!(stripe_intensity(0.15, 1.0, 0.2, 0.0), 0.0); // hard edge
+        assert_eq!(stripe_intensity(0.05, 1.0, 0.2, 0.0), 1.0);
+        assert_eq!(stripe_intensity(0.5, 1.0, 2.0, 0.1), 1.0); // bands wider than the period
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(stripe_intensity(0.0, bad, 0.2, 0.1), 0.0);
+        }
+        assert_eq!(stripe_intensity(f32::NAN, 1.0, 0.2, 0.1), 0.0);
+        assert_eq!(stripe_intensity(0.0, 1.0, f32::NAN, f32::NAN), 1.0);
+    }
+}
