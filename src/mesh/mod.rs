@@ -229,3 +229,115 @@ mod tests {
         assert_eq!(w, vec![0, 1, 1, 0]);
     }
 }
+
+/// Quick look at the meshes: `cargo test --lib mesh::preview -- --ignored` writes PNGs
+/// (normals as colours, orthographic, z-buffered; fin edges in white) to the target directory.
+#[cfg(test)]
+mod preview {
+    use super::*;
+    use glam::Mat3;
+
+    fn render(mesh: &Mesh, rot: Mat3, fins: bool, name: &str) {
+        const S: u32 = 400;
+        let mut img = image::RgbImage::new(S, S);
+        let mut depth = vec![f32::NEG_INFINITY; (S * S) as usize];
+        let min = mesh
+            .vertices
+            .iter()
+            .fold(Vec3::INFINITY, |m, v| m.min(rot * v.position));
+        let max = mesh
+            .vertices
+            .iter()
+            .fold(Vec3::NEG_INFINITY, |m, v| m.max(rot * v.position));
+        let c = (min + max) / 2.0;
+        let scale = 0.9 * S as f32 / (max - min).truncate().max_element();
+        let screen = |p: Vec3| {
+            let q = (rot * p - c) * scale;
+            Vec3::new(q.x + S as f32 / 2.0, S as f32 / 2.0 - q.y, q.z)
+        };
+        for tri in &mesh.indices {
+            let v = tri.map(|i| mesh.vertices[i as usize]);
+            let s = v.map(|v| screen(v.position));
+            let area =
+                (s[1].x - s[0].x) * (s[2].y - s[0].y) - (s[2].x - s[0].x) * (s[1].y - s[0].y);
+            if area >= 0.0 {
+                continue; // back face (y flipped: CCW becomes negative)
+            }
+            let lo = s[0].min(s[1]).min(s[2]).max(Vec3::ZERO);
+            let hi = s[0].max(s[1]).max(s[2]).min(Vec3::splat(S as f32 - 1.0));
+            for y in lo.y as u32..=hi.y as u32 {
+                for x in lo.x as u32..=hi.x as u32 {
+                    let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let e =
+                        |a: Vec3, b: Vec3| (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+                    let w = [
+                        e(s[1], s[2]) / area,
+                        e(s[2], s[0]) / area,
+                        e(s[0], s[1]) / area,
+                    ];
+                    if w.iter().any(|&w| w < 0.0) {
+                        continue;
+                    }
+                    let z = w[0] * s[0].z + w[1] * s[1].z + w[2] * s[2].z;
+                    let k = (y * S + x) as usize;
+                    if z > depth[k] {
+                        depth[k] = z;
+                        let n = (w[0] * v[0].normal + w[1] * v[1].normal + w[2] * v[2].normal)
+                            .normalize();
+                        let uv = w[0] * v[0].uv + w[1] * v[1].uv + w[2] * v[2].uv;
+                        let check = ((uv.x * 16.0) as i32 + (uv.y * 8.0) as i32) % 2 == 0;
+                        let f = if check { 1.0 } else { 0.8 };
+                        let col = (rot * n * 0.5 + 0.5) * 255.0 * f;
+                        img.put_pixel(x, y, image::Rgb([col.x as u8, col.y as u8, col.z as u8]));
+                    }
+                }
+            }
+        }
+        if fins {
+            let e = edges(mesh);
+            let eye = rot.transpose() * Vec3::new(0.0, 0.0, 100.0);
+            let w = FinWindows {
+                windows: vec![(70.0, 110.0)],
+            };
+            for k in silhouette_edges(mesh, &e, eye, &w) {
+                let [a, b] = e[k]
+                    .vertices
+                    .map(|i| screen(mesh.vertices[i as usize].position));
+                for t in 0..50 {
+                    let p = a.lerp(b, t as f32 / 49.0);
+                    if p.x >= 0.0 && p.y >= 0.0 && p.x < S as f32 && p.y < S as f32 {
+                        img.put_pixel(p.x as u32, p.y as u32, image::Rgb([255, 255, 255]));
+                    }
+                }
+            }
+        }
+        img.save(format!("/work/target-mesh/preview-{name}.png"))
+            .unwrap();
+    }
+
+    #[test]
+    #[ignore]
+    fn write_previews() {
+        let tilt = Mat3::from_rotation_x(0.6) * Mat3::from_rotation_y(0.4);
+        render(&procedural::torus(1.0, 0.4, 500), tilt, true, "torus");
+        render(&procedural::sphere(1.0, 500), tilt, true, "sphere");
+        render(
+            &procedural::cylinder(0.5, 1.5, 500),
+            tilt,
+            false,
+            "cylinder",
+        );
+        render(
+            &procedural::leg(2000),
+            Mat3::from_rotation_y(-std::f32::consts::FRAC_PI_2),
+            false,
+            "leg-side",
+        );
+        render(
+            &procedural::leg(2000),
+            Mat3::from_rotation_y(-0.5),
+            true,
+            "leg-34",
+        );
+    }
+}

@@ -230,7 +230,7 @@ fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
 /// Spine direction at `s`: angle from −y towards +z (a slight knee bend, then the foot turns
 /// forward).
 fn leg_angle(s: f32) -> f32 {
-    0.12 * libm::sinf(TAU * s) + 1.35 * smoothstep(0.74, 0.9, s)
+    0.12 * libm::sinf(TAU * s) + 1.4 * smoothstep(0.68, 0.84, s)
 }
 
 /// Tube radius at `s` (thigh, knee, calf, ankle, foot), closing as a quarter circle over the
@@ -240,8 +240,8 @@ fn leg_radius(s: f32) -> f32 {
         (0.0, 0.28),
         (0.42, 0.19),
         (0.56, 0.21),
-        (0.76, 0.11),
-        (0.88, 0.13),
+        (0.7, 0.11),
+        (0.86, 0.13),
         (LEG_CAP_START, 0.13),
     ];
     if s >= LEG_CAP_START {
