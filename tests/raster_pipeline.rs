@@ -164,10 +164,30 @@ fn blending_follows_submission_order() {
     let gr = draw_layers(&[green, red], BLENDED)
         .colour(7, 7)
         .expect("pixel");
-    // dst = src·a + dst·(1 − a), applied red then green over opaque black.
-    // Alpha blends too: 1 → 0.5·0.5 + 1·0.5 = 0.75 → 0.5·0.5 + 0.75·0.5 = 0.625.
-    assert_eq!(rg, Vec4::new(0.25, 0.5, 0.0, 0.625));
-    assert_eq!(gr, Vec4::new(0.5, 0.25, 0.0, 0.625));
+    // rgb = src·a + dst·(1 − a), applied red then green over opaque black; alpha accumulates
+    // as a + dst·(1 − a), so it stays 1 over an opaque background.
+    assert_eq!(rg, Vec4::new(0.25, 0.5, 0.0, 1.0));
+    assert_eq!(gr, Vec4::new(0.5, 0.25, 0.0, 1.0));
+    // Over a transparent background, coverage adds up: 0 → 0.5 → 0.75.
+    let mut fb = Framebuffer::new(4, 4, 2, Vec4::ZERO).expect("fb");
+    let mut frame = Frame::new(&mut fb);
+    for (z, colour) in [red, green] {
+        let (v, t) = full_screen_quad(z, colour);
+        frame
+            .draw(
+                &v,
+                &t,
+                BLENDED,
+                |&(p, c): &(Vec4, Vec4)| ClipVertex {
+                    position: p,
+                    varyings: c,
+                },
+                |f| Some(*f.varyings()),
+            )
+            .expect("draw");
+    }
+    frame.finish();
+    assert_eq!(fb.colour(1, 1), Some(Vec4::new(0.25, 0.5, 0.0, 0.75)));
 }
 
 /// A ground plane y = 0 seen by a camera at height 1, extending behind the camera (so it

@@ -1,7 +1,7 @@
 //! Tangent frames: the T, B, N basis that takes world vectors into the fur texture's space
 //! (thesis 3.2.1, eq. 3.1–3.3).
 //!
-//! How a mesh gets its frames ([`build`]), in order:
+//! How a mesh gets its frames (`build`), in order:
 //! 1. **Face normal** from positions: `n_f = (p2 − p1) × (p3 − p1)`, whose length is twice the
 //!    face's area.
 //! 2. **Vertex normal** = normalised sum of the unit face normals of every face touching a

@@ -34,7 +34,7 @@ pub enum BlendMode {
     /// Overwrite.
     #[default]
     Replace,
-    /// `src·a + dst·(1 − a)` (source alpha, one minus source alpha).
+    /// Colour `src·a + dst·(1 − a)`, alpha `a + dst·(1 − a)` (the "over" operator).
     Alpha,
     /// `src + dst` (one, one): counts overlaps, accumulates light.
     Add,

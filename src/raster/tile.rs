@@ -219,15 +219,18 @@ pub(crate) fn rasterize_triangle<V, F>(
     stats.fragments_written += written;
 }
 
-/// The blend equation. `Alpha` is `src·a + dst·(1 − a)` on all four channels with `a` the
-/// source alpha (OpenGL's `SRC_ALPHA, ONE_MINUS_SRC_ALPHA` applied to colour and alpha alike).
+/// The blend equation. `Alpha` is `rgb = src.rgb·a + dst.rgb·(1 − a)` and
+/// `alpha = a + dst.a·(1 − a)` with `a` the source alpha (OpenGL's
+/// `glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE, ONE_MINUS_SRC_ALPHA)`): colour is
+/// mixed, coverage accumulates, so fur over an opaque background stays opaque.
 #[inline]
 pub fn blend(mode: BlendMode, src: Vec4, dst: Vec4) -> Vec4 {
     match mode {
         BlendMode::Replace => src,
         BlendMode::Alpha => {
             let a = src.w;
-            src * a + dst * (1.0 - a)
+            let rgb = src.truncate() * a + dst.truncate() * (1.0 - a);
+            rgb.extend(a + dst.w * (1.0 - a))
         }
         BlendMode::Add => src + dst,
     }
@@ -242,7 +245,7 @@ mod tests {
         let src = Vec4::new(1.0, 0.5, 0.0, 0.25);
         let dst = Vec4::new(0.0, 0.5, 1.0, 1.0);
         let out = blend(BlendMode::Alpha, src, dst);
-        let expect = [0.25, 0.5, 0.75, 0.8125];
+        let expect = [0.25, 0.5, 0.75, 1.0];
         for (o, e) in out.to_array().iter().zip(expect) {
             assert!((o - e).abs() < 1e-7, "{out:?}");
         }

@@ -1,1 +1,460 @@
-//! Assembles one frame: base mesh, shells layer by layer, fins.
+//! Assembles one frame: the opaque base mesh, then the shells layer by layer from root to tip,
+//! alpha-blended, then fins at the silhouette (thesis 3.1.2, 3.1.4, 3.2).
+//!
+//! [`PreparedScene::new`] does the start-up work the thesis times in chapter 4.1 (build the mesh
+//! and its frames, generate strands, bake shell and fin textures); [`PreparedScene::render`] draws
+//! one frame from that data. Choices where the thesis is silent:
+//! - The fur tile covers `1/texture_repeat` of the mesh's uv square; strand heights in tile units
+//!   are set so that the tallest strand is `model_difference` long in world units, which keeps the
+//!   baked tangents' proportions equal to the rendered fur's.
+//! - Eye and light are taken into tangent space per vertex (the thesis's vertex shader) and
+//!   renormalised per fragment.
+//! - The skin under the fur is the fur colour darkened: `colour · 0.35 · (0.5 + 0.5·max(0, n·l))`.
+//! - All texture reads of one fragment use the level of detail of the fur uv's derivatives.
+
+mod fragment;
+
+use crate::camera::Camera;
+use crate::fur::{self, FurParams};
+use crate::mesh::{self, Mesh};
+use crate::raster::{
+    AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
+    Framebuffer, RasterError, RasterStats, Sampler, Texture,
+};
+use crate::scene::{MeshKind, Scene, ShellSpacingSetting};
+use fragment::{FurVaryings, ShadeParams};
+use glam::{Vec2, Vec3, Vec4};
+
+/// What can go wrong preparing or drawing a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The mesh could not be built or loaded.
+    #[error(transparent)]
+    Mesh(#[from] mesh::MeshError),
+    /// The fur parameters were refused.
+    #[error("fur: {0}")]
+    Fur(#[from] fur::FurError),
+    /// The rasterizer refused a size or a draw.
+    #[error("raster: {0}")]
+    Raster(#[from] RasterError),
+}
+
+impl RenderError {
+    /// Whether the error comes from the user's input (exit status 2) rather than the machine.
+    pub fn is_bad_input(&self) -> bool {
+        true
+    }
+}
+
+/// A shell or fin layer's two textures.
+struct LayerTextures {
+    colour: Texture,
+    tangent: Texture,
+}
+
+impl LayerTextures {
+    fn new(colour: &fur::Rgba8Image, tangent: &fur::Rgba8Image) -> Result<Self, RasterError> {
+        Ok(LayerTextures {
+            colour: Texture::from_rgba8(colour.width, colour.height, colour.texels.clone())?,
+            tangent: Texture::from_rgba8(tangent.width, tangent.height, tangent.texels.clone())?,
+        })
+    }
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct RenderedImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major RGBA8, row 0 at the top.
+    pub rgba8: Vec<u8>,
+    /// Rasterizer counters.
+    pub stats: RasterStats,
+    /// Non-fatal problems met while preparing (e.g. an OBJ without UVs).
+    pub warnings: Vec<String>,
+}
+
+/// A scene with its mesh built and its fur baked, ready to draw frames.
+pub struct PreparedScene {
+    scene: Scene,
+    mesh: Mesh,
+    edges: Vec<mesh::fins::Edge>,
+    warnings: Vec<String>,
+    shells: Vec<LayerTextures>,
+    shell_offsets: Vec<f32>,
+    fin: Option<LayerTextures>,
+    fin_height: f32,
+    tile_world_size: Vec2,
+}
+
+/// How opaque a fin is at a vertex: the angle between the eye vector and the normal, placed in
+/// the first fin window containing it, gives 1 at the window's centre falling linearly to 0 at
+/// its ends (as Lengyel fades fins in towards the silhouette). Outside every window: 0.
+pub fn fin_fade(windows: &[[f32; 2]], to_eye: Vec3, normal: Vec3) -> f32 {
+    let (Some(e), Some(n)) = (to_eye.try_normalize(), normal.try_normalize()) else {
+        return 0.0;
+    };
+    let angle = libm::acosf(e.dot(n).clamp(-1.0, 1.0)).to_degrees();
+    windows
+        .iter()
+        .find_map(|&[lo, hi]| {
+            let half = 0.5 * (hi - lo);
+            let centre = 0.5 * (hi + lo);
+            // Angles between vectors stop at 180°: a window reaching past it folds back.
+            let folded = if angle < lo && 360.0 - angle <= hi {
+                360.0 - angle
+            } else {
+                angle
+            };
+            (lo..=hi).contains(&folded).then(|| {
+                if half > 0.0 {
+                    1.0 - (folded - centre).abs() / half
+                } else {
+                    1.0
+                }
+            })
+        })
+        .unwrap_or(0.0)
+}
+
+/// Mean world length of one fur tile along u and v, from the mesh's dp/du, dp/dv.
+fn tile_world_size(mesh: &Mesh, repeat: [f32; 2]) -> Vec2 {
+    let n = mesh.vertices.len().max(1) as f64;
+    let (mut su, mut sv) = (0.0f64, 0.0f64);
+    for v in &mesh.vertices {
+        su += f64::from(v.dpdu.length());
+        sv += f64::from(v.dpdv.length());
+    }
+    let size = Vec2::new((su / n) as f32 / repeat[0], (sv / n) as f32 / repeat[1]);
+    // A mesh without usable UVs gets a tile of unit size rather than a zero or NaN scale.
+    Vec2::new(
+        if size.x.is_finite() && size.x > 0.0 {
+            size.x
+        } else {
+            1.0
+        },
+        if size.y.is_finite() && size.y > 0.0 {
+            size.y
+        } else {
+            1.0
+        },
+    )
+}
+
+/// Scales positions and the surface derivatives; normals and frames are unchanged.
+fn scaled(mut mesh: Mesh, scale: f32) -> Mesh {
+    for v in &mut mesh.vertices {
+        v.position *= scale;
+        v.dpdu *= scale;
+        v.dpdv *= scale;
+    }
+    mesh
+}
+
+fn build_mesh(scene: &Scene) -> Result<(Mesh, Vec<String>), RenderError> {
+    let m = &scene.mesh;
+    let mesh = match m.kind {
+        MeshKind::Torus => {
+            mesh::procedural::torus(m.major_radius, m.minor_radius, m.model_resolution)
+        }
+        MeshKind::Sphere => mesh::procedural::sphere(m.radius, m.model_resolution),
+        MeshKind::Cylinder => mesh::procedural::cylinder(m.radius, m.height, m.model_resolution),
+        MeshKind::Leg => scaled(mesh::procedural::leg(m.model_resolution), m.scale),
+        MeshKind::Obj => {
+            let path = m.path.clone().unwrap_or_default();
+            let loaded = mesh::obj::load_obj(&scene.base_dir.join(path))?;
+            return Ok((scaled(loaded.mesh, m.scale), loaded.warnings));
+        }
+    };
+    Ok((mesh, Vec::new()))
+}
+
+fn fur_params(scene: &Scene, tile: Vec2) -> FurParams {
+    let f = &scene.fur;
+    let tile_width = tile.x.max(tile.y);
+    let max_height = f.model_difference / tile_width;
+    FurParams {
+        number_of_strands: f.number_of_strands,
+        strand_resolution: f.strand_resolution,
+        circle_resolution: f.circle_resolution,
+        number_of_shells: f.number_of_shells,
+        texture_resolution: f.texture_resolution,
+        supersample: f.supersample,
+        min_height: max_height * f.min_height,
+        max_height,
+        slope_deg: f.slope_deg,
+        curl: f.curl,
+        jitter: f.jitter,
+        base_thickness: f.base_thickness,
+        tip_thickness: f.tip_thickness.min(f.base_thickness),
+        colour: f.colour,
+        colour_variation: f.colour_variation,
+        gaussian_sigma: f.gaussian_sigma,
+        fin_height_scale: f.fin_height_scale,
+        ..FurParams::default()
+    }
+}
+
+impl PreparedScene {
+    /// Builds the mesh and bakes the fur (the thesis's start-up).
+    pub fn new(scene: &Scene) -> Result<Self, RenderError> {
+        crate::raster::framebuffer::check_size(scene.image.width, scene.image.height)?;
+        let (mesh, warnings) = build_mesh(scene)?;
+        let tile = tile_world_size(&mesh, scene.fur.texture_repeat);
+        let params = fur_params(scene, tile);
+        let strands = fur::generate_strands(&params, scene.seed)?;
+        let baked = fur::bake_shells(&params, &strands)?;
+        let shells = baked
+            .layers
+            .iter()
+            .map(|l| LayerTextures::new(&l.colour, &l.tangent))
+            .collect::<Result<Vec<_>, _>>()?;
+        let spacing = match scene.fur.shell_spacing {
+            ShellSpacingSetting::Uniform => mesh::shells::ShellSpacing::Uniform,
+            ShellSpacingSetting::DenserNearTip => mesh::shells::ShellSpacing::DenserNearTip,
+        };
+        let n = scene.fur.number_of_shells;
+        let shell_offsets = (0..n)
+            .map(|i| mesh::shells::shell_offset(i, n, scene.fur.model_difference, spacing))
+            .collect();
+        let (fin, fin_height) = if scene.fur.fins {
+            let baked_fin = fur::bake_fin(&params, scene.seed)?;
+            let height = scene.fur.model_difference * baked_fin.max_height
+                / baked.max_height.max(f32::EPSILON);
+            (
+                Some(LayerTextures::new(&baked_fin.colour, &baked_fin.tangent)?),
+                height,
+            )
+        } else {
+            (None, 0.0)
+        };
+        let edges = mesh::fins::edges(&mesh);
+        Ok(PreparedScene {
+            scene: scene.clone(),
+            mesh,
+            edges,
+            warnings,
+            shells,
+            shell_offsets,
+            fin,
+            fin_height,
+            tile_world_size: tile,
+        })
+    }
+
+    /// The scene this was prepared from.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The mesh carrying the fur.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Draws one frame with the given tile size.
+    pub fn render(&self, tile_size: u32) -> Result<RenderedImage, RenderError> {
+        let s = &self.scene;
+        let (width, height) = (s.image.width, s.image.height);
+        let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
+        let camera = Camera {
+            eye: s.camera.eye,
+            target: s.camera.target,
+            up: s.camera.up,
+            fov_y_deg: s.camera.fov_y_deg,
+            near: s.camera.near,
+            far: s.camera.far,
+        };
+        let view_proj = camera.view_projection(width as f32 / height as f32);
+        let light = s.light.direction.normalize_or_zero();
+        let repeat = Vec2::from(s.fur.texture_repeat);
+        let shade = ShadeParams::from_scene(s);
+        let mut frame = Frame::new(&mut fb);
+
+        // The skin: opaque, writes depth.
+        let skin_colour = s.fur.colour * 0.35;
+        let debug = s.shading.debug_view != crate::scene::DebugView::None;
+        frame.draw(
+            &self.mesh.vertices,
+            &self.mesh.indices,
+            DrawState {
+                cull: CullMode::Back,
+                ..DrawState::default()
+            },
+            |v: &mesh::Vertex| ClipVertex {
+                position: view_proj * v.position.extend(1.0),
+                varyings: v.normal,
+            },
+            move |f| {
+                if debug {
+                    return Some(Vec4::new(0.0, 0.0, 0.0, 1.0));
+                }
+                let n = f.varyings().normalize_or_zero();
+                Some((skin_colour * (0.5 + 0.5 * n.dot(light).max(0.0))).extend(1.0))
+            },
+        )?;
+
+        // Shells, root to tip (thesis 3.1.4: layer by layer to avoid depth/alpha problems).
+        let blended = DrawState {
+            depth_compare: DepthCompare::LessEqual,
+            depth_write: false,
+            blend: BlendMode::Alpha,
+            cull: CullMode::Back,
+        };
+        let shell_sampler = Sampler {
+            address_u: AddressMode::Wrap,
+            address_v: AddressMode::Wrap,
+            filter: Filter::Trilinear,
+        };
+        let n = s.fur.number_of_shells;
+        let difference = s.fur.model_difference;
+        for (i, layer) in self.shells.iter().enumerate() {
+            let offset = self.shell_offsets[i];
+            let eye = camera.eye;
+            let lookups =
+                crate::shading::shadow_lookup_count(n, i as u32, s.shading.shadow_divisor);
+            frame.draw(
+                &self.mesh.vertices,
+                &self.mesh.indices,
+                blended,
+                move |v: &mesh::Vertex| {
+                    let p = v.position + v.normal * offset;
+                    let change =
+                        crate::shading::shadow_change(light, v.frame.normal, difference - offset);
+                    ClipVertex {
+                        position: view_proj * p.extend(1.0),
+                        varyings: FurVaryings {
+                            uv: v.uv * repeat,
+                            light: crate::shading::to_tangent_space(light, &v.frame),
+                            eye: crate::shading::to_tangent_space(eye - p, &v.frame),
+                            shadow: crate::shading::project_to_uv(
+                                change,
+                                v.dpdu / repeat.x,
+                                v.dpdv / repeat.y,
+                            ),
+                            fade: 1.0,
+                        },
+                    }
+                },
+                move |f| {
+                    fragment::shade_fur(
+                        f,
+                        &layer.colour,
+                        &layer.tangent,
+                        shell_sampler,
+                        lookups,
+                        &shade,
+                    )
+                },
+            )?;
+        }
+
+        // Fins at the silhouette.
+        if let Some(fin) = &self.fin {
+            let (vertices, triangles) = self.fin_geometry(camera.eye, light);
+            let fin_sampler = Sampler {
+                address_u: AddressMode::Wrap,
+                address_v: AddressMode::Clamp,
+                filter: Filter::Trilinear,
+            };
+            frame.draw(
+                &vertices,
+                &triangles,
+                DrawState {
+                    cull: CullMode::None,
+                    ..blended
+                },
+                |&(p, v): &(Vec3, FurVaryings)| ClipVertex {
+                    position: view_proj * p.extend(1.0),
+                    varyings: v,
+                },
+                move |f| fragment::shade_fur(f, &fin.colour, &fin.tangent, fin_sampler, 0, &shade),
+            )?;
+        }
+
+        let stats = frame.finish();
+        Ok(RenderedImage {
+            width,
+            height,
+            rgba8: fb.to_rgba8(),
+            stats,
+            warnings: self.warnings.clone(),
+        })
+    }
+
+    /// Fin quads for this eye: one per silhouette edge, from the skin up to the fin height along
+    /// the vertex normals. Their frame: x along the edge (texture u), z up the averaged normal
+    /// (texture v), y = z × x.
+    fn fin_geometry(&self, eye: Vec3, light: Vec3) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
+        let windows = mesh::fins::FinWindows {
+            windows: self
+                .scene
+                .fur
+                .fin_windows
+                .iter()
+                .map(|w| (w[0], w[1]))
+                .collect(),
+        };
+        let selected = mesh::fins::silhouette_edges(&self.mesh, &self.edges, eye, &windows);
+        let mut vertices = Vec::with_capacity(selected.len() * 4);
+        let mut triangles = Vec::with_capacity(selected.len() * 2);
+        for &e in &selected {
+            let edge = &self.edges[e];
+            let [ia, ib] = edge.vertices.map(|i| i as usize);
+            let (Some(a), Some(b)) = (self.mesh.vertices.get(ia), self.mesh.vertices.get(ib))
+            else {
+                continue;
+            };
+            let along = b.position - a.position;
+            let length = along.length();
+            let x = along.normalize_or_zero();
+            let up = (a.normal + b.normal).normalize_or_zero();
+            let z = (up - x * up.dot(x)).normalize_or_zero();
+            if length == 0.0 || z == Vec3::ZERO {
+                continue;
+            }
+            let frame = mesh::frame::TangentFrame {
+                tangent: x,
+                binormal: z.cross(x),
+                normal: z,
+            };
+            // Each fin starts at its first vertex's fur coordinate, so neighbouring fins do not
+            // all show the same strip of the fin texture.
+            let repeat = Vec2::from(self.scene.fur.texture_repeat);
+            let u0 = (a.uv * repeat).element_sum();
+            let u1 = u0 + length / self.tile_world_size.x;
+            let corners = [
+                (a.position, a.normal, Vec2::new(u0, 0.0)),
+                (b.position, b.normal, Vec2::new(u1, 0.0)),
+                (
+                    b.position + b.normal * self.fin_height,
+                    b.normal,
+                    Vec2::new(u1, 1.0),
+                ),
+                (
+                    a.position + a.normal * self.fin_height,
+                    a.normal,
+                    Vec2::new(u0, 1.0),
+                ),
+            ];
+            let base = vertices.len() as u32;
+            for (p, n, uv) in corners {
+                vertices.push((
+                    p,
+                    FurVaryings {
+                        uv,
+                        light: crate::shading::to_tangent_space(light, &frame),
+                        eye: crate::shading::to_tangent_space(eye - p, &frame),
+                        shadow: Vec2::ZERO,
+                        fade: fin_fade(&self.scene.fur.fin_windows, eye - p, n),
+                    },
+                ));
+            }
+            triangles.push([base, base + 1, base + 2]);
+            triangles.push([base, base + 2, base + 3]);
+        }
+        (vertices, triangles)
+    }
+}

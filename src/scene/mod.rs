@@ -155,7 +155,7 @@ pub struct MeshSettings {
     pub model_resolution: u32,
     /// OBJ file, relative to the scene file.
     pub path: Option<PathBuf>,
-    /// Uniform scale applied to OBJ positions.
+    /// Uniform scale applied to OBJ and leg positions (the leg is about 2 units tall at 1).
     pub scale: f32,
 }
 
@@ -244,7 +244,7 @@ impl Default for FurSettings {
             model_difference: 1.0,
             shell_spacing: ShellSpacingSetting::Uniform,
             texture_repeat: [8.0, 4.0],
-            colour: Vec3::new(0.45, 0.28, 0.15),
+            colour: Vec3::new(0.36, 0.2, 0.09),
             colour_variation: 0.25,
             slope_deg: 20.0,
             curl: 0.3,
@@ -297,9 +297,9 @@ impl Default for WeightSettings {
         WeightSettings {
             ambient: 1.0,
             diffuse: 1.0,
-            specular: 1.0,
-            dampened: 1.0,
-            shadow: 0.08,
+            specular: 0.5,
+            dampened: 0.45,
+            shadow: 0.12,
         }
     }
 }
@@ -357,7 +357,7 @@ pub struct LightSettings {
 impl Default for LightSettings {
     fn default() -> Self {
         LightSettings {
-            direction: Vec3::new(0.5, 1.0, 0.3),
+            direction: Vec3::new(0.9, 0.7, 0.3),
             colour: Vec3::ONE,
         }
     }

@@ -1,0 +1,174 @@
+//! Golden images: every scene in `scenes/` is rendered and compared pixel-exact with its
+//! reference in `reference_images/`.
+//!
+//! On a mismatch the test writes `target/golden-diff/<scene>.png` (expected | differing pixels
+//! in red | actual) and fails. To regenerate references on purpose, run
+//! `PELAGE_BLESS=1 cargo test --release --test golden`: it writes every reference, then fails
+//! so that a blessing run is never mistaken for a passing one.
+
+use pelage::render::PreparedScene;
+use pelage::scene::Scene;
+use std::path::PathBuf;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn render(scene: &Scene, tile: u32) -> Vec<u8> {
+    let prepared = PreparedScene::new(scene).expect("scene prepares");
+    prepared.render(tile).expect("scene renders").rgba8
+}
+
+fn write_diff(name: &str, width: u32, height: u32, expected: &[u8], actual: &[u8]) -> PathBuf {
+    let dir = root().join("target/golden-diff");
+    std::fs::create_dir_all(&dir).expect("diff folder");
+    let (w, h) = (width as usize, height as usize);
+    let mut out = vec![0u8; 3 * w * h * 4];
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) * 4;
+            let row = y * 3 * w;
+            let differs = expected[i..i + 4] != actual[i..i + 4];
+            out[(row + x) * 4..(row + x) * 4 + 4].copy_from_slice(&expected[i..i + 4]);
+            let mask = if differs {
+                [255, 0, 0, 255]
+            } else {
+                [0, 0, 0, 255]
+            };
+            out[(row + w + x) * 4..(row + w + x) * 4 + 4].copy_from_slice(&mask);
+            out[(row + 2 * w + x) * 4..(row + 2 * w + x) * 4 + 4]
+                .copy_from_slice(&actual[i..i + 4]);
+        }
+    }
+    let path = dir.join(format!("{name}.png"));
+    pelage::output::write_png(&path, width * 3, height, &out).expect("diff image");
+    path
+}
+
+/// Loads a scene for golden testing. Goldens are at most 640×480 to keep the suite fast: a
+/// larger scene (the thesis's 1366×768 configuration) is checked at 640 pixels wide, same aspect.
+fn load_scene(name: &str) -> Scene {
+    let path = root().join("scenes").join(format!("{name}.toml"));
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    if scene.image.width > 640 || scene.image.height > 480 {
+        let scale = (640.0 / scene.image.width as f32).min(480.0 / scene.image.height as f32);
+        scene.image.width = ((scene.image.width as f32 * scale) as u32).max(1);
+        scene.image.height = ((scene.image.height as f32 * scale) as u32).max(1);
+    }
+    scene
+}
+
+fn check_scene(name: &str) {
+    let scene = load_scene(name);
+    let actual = render(&scene, 64);
+    let reference = root().join("reference_images").join(format!("{name}.png"));
+    if std::env::var_os("PELAGE_BLESS").is_some() {
+        pelage::output::write_png(&reference, scene.image.width, scene.image.height, &actual)
+            .expect("write reference");
+        panic!(
+            "PELAGE_BLESS is set: wrote {}; unset it and rerun",
+            reference.display()
+        );
+    }
+    let expected = image::open(&reference)
+        .unwrap_or_else(|e| {
+            panic!(
+                "{}: {e} (regenerate with PELAGE_BLESS=1)",
+                reference.display()
+            )
+        })
+        .to_rgba8();
+    assert_eq!(
+        (expected.width(), expected.height()),
+        (scene.image.width, scene.image.height),
+        "{name}: reference size differs"
+    );
+    if expected.as_raw() != &actual {
+        let differing = expected
+            .as_raw()
+            .chunks(4)
+            .zip(actual.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        let diff = write_diff(
+            name,
+            scene.image.width,
+            scene.image.height,
+            expected.as_raw(),
+            &actual,
+        );
+        panic!(
+            "{name}: {differing} pixels differ from {}; see {}",
+            reference.display(),
+            diff.display()
+        );
+    }
+}
+
+/// Every scene also renders byte-identically with other thread counts and tile sizes.
+fn check_invariance(name: &str) {
+    let scene = load_scene(name);
+    let prepared = PreparedScene::new(&scene).expect("prepares");
+    let reference = prepared.render(64).expect("renders").rgba8;
+    for threads in [1, 2, 8] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        for tile in [16, 64] {
+            let again = pool.install(|| {
+                // Bake again inside the pool too: baking must not depend on the thread count.
+                let prepared = PreparedScene::new(&scene).expect("prepares");
+                prepared.render(tile).expect("renders").rgba8
+            });
+            assert!(
+                again == reference,
+                "{name}: threads {threads}, tile {tile} differ"
+            );
+        }
+    }
+}
+
+macro_rules! golden {
+    ($($name:ident => $file:literal),* $(,)?) => {
+        $(
+            mod $name {
+                #[test]
+                fn matches_reference() {
+                    super::check_scene($file);
+                }
+                #[test]
+                fn identical_for_threads_and_tiles() {
+                    super::check_invariance($file);
+                }
+            }
+        )*
+        const LISTED: &[&str] = &[$($file),*];
+    };
+}
+
+golden! {
+    torus => "torus",
+    tangents => "tangents",
+    specular => "specular",
+    leg => "leg",
+    thesis_4_2 => "thesis-4-2",
+}
+
+#[test]
+fn every_scene_has_a_golden_test() {
+    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("scenes"))
+        .expect("scenes folder")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    on_disk.sort();
+    let mut listed: Vec<String> = LISTED.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(
+        on_disk, listed,
+        "every scene in scenes/ needs an entry in the golden! list"
+    );
+}
