@@ -1,7 +1,8 @@
 //! Tangent frames: the T, B, N basis that takes world vectors into the fur texture's space
 //! (thesis 3.2.1, eq. 3.1–3.3).
 //!
-//! How a mesh gets its frames (`build`), in order:
+//! How a mesh gets its frames (in [`Mesh::from_parts`], the procedural meshes and the OBJ
+//! loader), in order:
 //! 1. **Face normal** from positions: `n_f = (p2 − p1) × (p3 − p1)`, whose length is twice the
 //!    face's area.
 //! 2. **Vertex normal** = normalised sum of the unit face normals of every face touching a
@@ -13,8 +14,11 @@
 //! 3. **Face T and B** (eq. 3.1, 3.2, [`face_tangents`]): ∂p/∂u and ∂p/∂v of the face, solved
 //!    from its edges and UV differences. Faces whose UVs are degenerate (zero UV area, all UVs
 //!    equal) have none and are skipped.
-//! 4. **Vertex `dpdu`, `dpdv`** = area-weighted average of the adjacent faces' T and B (per
-//!    vertex index, *not* welded: across a UV seam the parametrisation may differ).
+//! 4. **Vertex `dpdu`, `dpdv`** = area-weighted average of the adjacent faces' T and B. Across
+//!    a UV seam, vertices with the same position pool their faces only when their own sums
+//!    agree in direction (positive dot for both T and B): a wrap-around seam (torus, sphere,
+//!    `u = 1` next to `u = 0`) gets identical, symmetric derivatives on both sides, while a
+//!    mirrored seam keeps each side's own orientation.
 //! 5. **Frame** ([`TangentFrame::from_derivatives`]): N = vertex normal; T = `dpdu`
 //!    Gram–Schmidt-orthogonalised against N and normalised; B = N × T, flipped when it points
 //!    against `dpdv` (mirrored UVs). So T, B, N are always orthonormal.
@@ -193,6 +197,27 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
         }
     }
 
+    // Seam welding of the derivatives: vertices that share a position and whose own sums point
+    // the same way (positive dot for both T and B) pool their sums, in index order.
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by_key(|&i| (weld[i as usize], i));
+    let mut pooled = vec![(Vec3::ZERO, Vec3::ZERO, 0.0f32); n];
+    for group in order.chunk_by(|&a, &b| weld[a as usize] == weld[b as usize]) {
+        for &i in group {
+            let i = i as usize;
+            let mut acc = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
+            for &j in group {
+                let j = j as usize;
+                let same = j == i
+                    || (dpdu_sum[j].dot(dpdu_sum[i]) > 0.0 && dpdv_sum[j].dot(dpdv_sum[i]) > 0.0);
+                if same {
+                    acc = (acc.0 + dpdu_sum[j], acc.1 + dpdv_sum[j], acc.2 + weight[j]);
+                }
+            }
+            pooled[i] = acc;
+        }
+    }
+
     let vertices = (0..n)
         .map(|i| {
             let w = weld[i] as usize;
@@ -200,8 +225,9 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
                 .try_normalize()
                 .or(first_face_normal[w])
                 .unwrap_or(Vec3::Y);
-            let (dpdu, dpdv) = if weight[i] > 0.0 && weight[i].is_finite() {
-                (dpdu_sum[i] / weight[i], dpdv_sum[i] / weight[i])
+            let (dpdu_sum, dpdv_sum, weight) = pooled[i];
+            let (dpdu, dpdv) = if weight > 0.0 && weight.is_finite() {
+                (dpdu_sum / weight, dpdv_sum / weight)
             } else {
                 (Vec3::ZERO, Vec3::ZERO)
             };
@@ -402,6 +428,42 @@ pub(crate) mod tests {
             assert_orthonormal(&v.frame, 1e-6);
         }
         assert_eq!(mesh.vertices[3].normal, Vec3::Y);
+    }
+
+    #[test]
+    fn mirrored_seam_keeps_each_side() {
+        // Two quads in the xy plane sharing the edge x = 1; the right one has u mirrored, so
+        // the shared edge is split into two vertex pairs with different UVs.
+        let p = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::Y,
+            Vec3::X,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(2.0, 1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        ];
+        let uv = [
+            Vec2::ZERO,
+            Vec2::X,
+            Vec2::ONE,
+            Vec2::Y,
+            Vec2::X,
+            Vec2::ZERO,
+            Vec2::Y,
+            Vec2::ONE,
+        ];
+        let idx = vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]];
+        let mesh = Mesh::from_parts(&p, &uv, idx).unwrap();
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            assert_orthonormal(&v.frame, 1e-6);
+            assert!((v.normal - Vec3::Z).length() < 1e-6);
+            let expect = if i < 4 { Vec3::X } else { -Vec3::X };
+            assert!((v.frame.tangent - expect).length() < 1e-6, "{i}: {v:?}");
+            assert!((v.frame.binormal - Vec3::Y).length() < 1e-6);
+            assert_eq!(v.frame.is_right_handed(), i < 4);
+        }
     }
 
     #[test]

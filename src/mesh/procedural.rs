@@ -331,8 +331,13 @@ mod tests {
         }
     }
 
-    /// Vertices with identical positions have identical normals.
+    /// Vertices with identical positions have identical normals (and, with `frames`, identical
+    /// tangent frames and derivatives: wrap-around seams are invisible to shading).
     fn check_seams(mesh: &Mesh) {
+        check_seams_with(mesh, false)
+    }
+
+    fn check_seams_with(mesh: &Mesh, frames: bool) {
         let weld = super::super::weld_by_position(
             &mesh.vertices.iter().map(|v| v.position).collect::<Vec<_>>(),
         );
@@ -340,7 +345,11 @@ mod tests {
         for (i, &w) in weld.iter().enumerate() {
             if w as usize != i {
                 dup += 1;
-                assert_eq!(mesh.vertices[i].normal, mesh.vertices[w as usize].normal);
+                let (a, b) = (&mesh.vertices[i], &mesh.vertices[w as usize]);
+                assert_eq!(a.normal, b.normal);
+                if frames {
+                    assert_eq!((a.frame, a.dpdu, a.dpdv), (b.frame, b.dpdu, b.dpdv));
+                }
             }
         }
         assert!(dup > 0);
@@ -378,7 +387,7 @@ mod tests {
     fn torus_geometry() {
         let mesh = torus(1.0, 0.4, 500);
         check_mesh(&mesh);
-        check_seams(&mesh);
+        check_seams_with(&mesh, true);
         let (a, b) = torus_segments(1.0, 0.4, 500);
         assert_eq!(mesh.vertices.len() as u32, (a + 1) * (b + 1));
         for v in &mesh.vertices {
@@ -389,6 +398,9 @@ mod tests {
             assert!(d.normalize().dot(v.normal) > 0.99);
             // T follows the major circle (u), B the minor circle (v).
             assert!(v.frame.tangent.dot(Vec3::Y.cross(q)) > 0.99);
+            // Eq. 3.3 on the raw derivatives: dpdu × dpdv is along the geometric normal.
+            let c = v.dpdu.cross(v.dpdv).normalize().dot(v.normal);
+            assert!(c > 0.99, "{c} {v:?}");
         }
     }
 
@@ -414,7 +426,7 @@ mod tests {
     fn cylinder_geometry() {
         let mesh = cylinder(0.5, 2.0, 500);
         check_mesh(&mesh);
-        check_seams(&mesh);
+        check_seams_with(&mesh, true);
         for v in &mesh.vertices {
             let radial = Vec3::new(v.position.x, 0.0, v.position.z);
             assert!((radial.length() - 0.5).abs() < 1e-5);
