@@ -6,8 +6,10 @@
 //!   average `(a + b + c + d + 2) >> 2` (integers) of texels (2x, 2y), (2x+1, 2y), (2x, 2y+1),
 //!   (2x+1, 2y+1) of level k, coordinates clamped to level k's size.
 //! - Addressing: `Wrap` takes the integer texel index modulo the size (Euclidean), `Clamp`
-//!   clamps it to `[0, size − 1]`. Non-finite coordinates are treated as 0.
-//! - `Nearest` reads texel `⌊u·w⌋` of level 0. `Bilinear` reads level 0 at `x = u·w − 0.5`,
+//!   clamps it to `[0, size − 1]`. Texel-space coordinates (`u·w`, `u·w − 0.5`) that are not
+//!   finite are treated as 0, others are clamped to ±2^30.
+//! - `Nearest` reads texel `⌊u·w⌋` of level 0. [`Sampler::sample_nearest_level`] reads texel
+//!   `⌊u·w_k⌋` of level `k = ⌊clamp(λ) + 0.5⌋`. `Bilinear` reads level 0 at `x = u·w − 0.5`,
 //!   `x0 = ⌊x⌋`, `fx = x − x0` (same for y) and returns
 //!   `lerp(lerp(t00, t10, fx), lerp(t01, t11, fx), fy)` with `lerp(a, b, t) = a + (b − a)·t`.
 //! - `Trilinear` computes the level of detail from the quad's coarse derivatives of (u, v):
@@ -178,15 +180,35 @@ fn to_vec4(t: [u8; 4]) -> Vec4 {
 
 #[inline]
 fn address(i: i64, size: u32, mode: AddressMode) -> i64 {
+    let size = i64::from(size);
     match mode {
-        AddressMode::Wrap => i.rem_euclid(i64::from(size)),
-        AddressMode::Clamp => i.clamp(0, i64::from(size) - 1),
+        // Most coordinates are already inside: skip the division.
+        AddressMode::Wrap if (0..size).contains(&i) => i,
+        AddressMode::Wrap => i.rem_euclid(size),
+        AddressMode::Clamp => i.clamp(0, size - 1),
     }
 }
 
+/// Texel coordinates are kept within ±2^30 (far beyond any texture), which makes the floor
+/// below exact.
+const COORDINATE_LIMIT: f32 = (1u32 << 30) as f32;
+
+/// A texel-space coordinate: non-finite values become 0, others are clamped to ±2^30.
 #[inline]
-fn finite_or_zero(x: f32) -> f32 {
-    if x.is_finite() { x } else { 0.0 }
+fn texel_coordinate(x: f32) -> f32 {
+    if x.is_finite() {
+        x.clamp(-COORDINATE_LIMIT, COORDINATE_LIMIT)
+    } else {
+        0.0
+    }
+}
+
+/// `⌊x⌋` for `|x| ≤ 2^30`, equal to `f32::floor` there. (`f32::floor` is a library call on
+/// x86-64 without SSE4.1; truncation plus a correction is not.)
+#[inline]
+fn floor_small(x: f32) -> i64 {
+    let t = x as i64;
+    if (t as f32) > x { t - 1 } else { t }
 }
 
 /// The level of detail λ for a texture of `width`×`height` from the coarse derivatives of the
@@ -241,10 +263,24 @@ impl Sampler {
         a + (b - a) * frac
     }
 
+    /// The nearest texel of mip level `round(lod)` (clamped to the chain, NaN → 0): one texel
+    /// read, for lookups that only ask whether a point is covered.
+    #[inline]
+    pub fn sample_nearest_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
+        let max = (texture.levels.len() - 1) as f32;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, max)
+        };
+        // lod is in [0, max]: adding 0.5 and truncating rounds half up.
+        self.nearest(&texture.levels[(lod + 0.5) as usize], uv)
+    }
+
     #[inline]
     fn nearest(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
-        let x = (finite_or_zero(uv.x) * level.width as f32).floor() as i64;
-        let y = (finite_or_zero(uv.y) * level.height as f32).floor() as i64;
+        let x = floor_small(texel_coordinate(uv.x * level.width as f32));
+        let y = floor_small(texel_coordinate(uv.y * level.height as f32));
         to_vec4(level.texel(
             address(x, level.width, self.address_u),
             address(y, level.height, self.address_v),
@@ -253,11 +289,10 @@ impl Sampler {
 
     #[inline]
     fn bilinear(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
-        let x = finite_or_zero(uv.x) * level.width as f32 - 0.5;
-        let y = finite_or_zero(uv.y) * level.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (xi, yi) = (x0 as i64, y0 as i64);
+        let x = texel_coordinate(uv.x * level.width as f32 - 0.5);
+        let y = texel_coordinate(uv.y * level.height as f32 - 0.5);
+        let (xi, yi) = (floor_small(x), floor_small(y));
+        let (fx, fy) = (x - xi as f32, y - yi as f32);
         let xa = address(xi, level.width, self.address_u);
         let xb = address(xi.saturating_add(1), level.width, self.address_u);
         let ya = address(yi, level.height, self.address_v);
@@ -327,6 +362,42 @@ mod tests {
         assert_eq!(at(&clamp, -0.1), Vec4::ZERO);
         assert_eq!(at(&clamp, 7.0), Vec4::new(0.0, 0.0, 1.0, 0.0));
         assert_eq!(at(&wrap, f32::NAN), Vec4::ZERO);
+        assert_eq!(at(&wrap, 1e30), at(&wrap, (1u32 << 30) as f32 / 4.0));
+    }
+
+    #[test]
+    fn nearest_level_picks_the_rounded_level() {
+        let t = checker(8);
+        let s = Sampler::default();
+        let uv = Vec2::new(0.1, 0.1);
+        assert_eq!(s.sample_nearest_level(&t, uv, 0.4).x, 1.0);
+        // Level 1 of a one-texel checkerboard is uniform grey (128/255).
+        assert_eq!(s.sample_nearest_level(&t, uv, 0.5).x, 128.0 / 255.0);
+        assert_eq!(
+            s.sample_nearest_level(&t, uv, 99.0),
+            s.sample_nearest_level(&t, uv, 3.0)
+        );
+        assert_eq!(s.sample_nearest_level(&t, uv, f32::NAN).x, 1.0);
+    }
+
+    #[test]
+    fn floor_small_matches_floor() {
+        for x in [
+            -3.5f32,
+            -3.0,
+            -0.25,
+            -0.0,
+            0.0,
+            0.25,
+            2.999_999_8,
+            3.0,
+            8_388_607.5,
+            -8_388_607.5,
+            1.0e9,
+            -1.0e9,
+        ] {
+            assert_eq!(floor_small(x), x.floor() as i64, "{x}");
+        }
     }
 
     #[test]

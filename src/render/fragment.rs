@@ -1,5 +1,9 @@
 //! The fur fragment closure: the thesis's fragment shader (3.2) as Rust, composed from the pure
 //! terms in [`crate::shading`].
+//!
+//! Texture reads: the colour and tangent maps are read trilinearly at the level of detail of
+//! the fur uv's coarse derivatives; each shadow lookup reads the alpha of one texel, the nearest
+//! one on the mip level nearest that level of detail.
 
 use crate::raster::texture::level_of_detail;
 use crate::raster::{Fragment, Sampler, Texture, Varyings};
@@ -121,8 +125,10 @@ pub fn shade_fur(
     let tangent = (encoded.truncate() * 2.0 - Vec3::ONE).normalize_or(Vec3::Z);
     let light = v.light.normalize_or_zero();
     let eye = v.eye.normalize_or_zero();
+    // The thesis checks "if the according pixel is transparent": one texel per lookup, the
+    // nearest of the mip level closest to this fragment's level of detail.
     let shadow = shading::shell_shadow(
-        |uv| sampler.sample_level(colour_map, uv, lod).w,
+        |uv| sampler.sample_nearest_level(colour_map, uv, lod).w,
         v.uv,
         v.shadow,
         lookups,

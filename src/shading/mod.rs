@@ -16,6 +16,25 @@
 //! | 3.3 wind | [`wind_force`], [`wind_displacement`], [`wind_uv_offset`], [`bend_tangent`] | `wind.rs` |
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
 //!
+//! # Calling a term from your own test
+//! Each term is a plain function, so a GPU port can check its shader line against it:
+//! ```
+//! use glam::Vec3;
+//! use pelage::shading::{BANKS_EXPONENT, dampened_specular, kajiya_kay_diffuse};
+//!
+//! // A strand leaning 30° away from the light: Kajiya–Kay diffuse sin(t, l) (eq. 2.5),
+//! // raised to Banks's exponent 4.8.
+//! let tangent = Vec3::new(0.5, 0.0, 3f32.sqrt() / 2.0);
+//! let light = Vec3::Z;
+//! let ours = kajiya_kay_diffuse(tangent, light, BANKS_EXPONENT);
+//! let expected = 0.5f64.powf(4.8); // sin 30° = 0.5
+//! assert!((f64::from(ours) - expected).abs() < 1e-6);
+//!
+//! // The dampened specular of thesis 3.2.3: a gradient up to 0.6, then a constant 0.3.
+//! assert_eq!(dampened_specular(0.4), 0.2);
+//! assert_eq!(dampened_specular(0.9), 0.3);
+//! ```
+//!
 //! # Numeric choices (stable: a GPU port must follow them)
 //! - Everything is `f32`. Transcendentals come from `libm` (`powf`, `expf`, `sinf`, `tanhf`,
 //!   `floorf`, `roundf`), never from `f32` methods, so results do not depend on the platform's

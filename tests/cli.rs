@@ -1,0 +1,191 @@
+//! The `pelage` binary as a user runs it: identical files for any thread count and tile size,
+//! bad input answered with exit status 2 and a one-line message naming what is wrong.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn pelage(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(args)
+        .output()
+        .expect("pelage runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("write");
+    path
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs `pelage render` on bad input and checks the contract: exit 2, one line, no panic.
+fn refused(args: &[&str], expect: &str) {
+    let o = pelage(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(
+        err.contains(expect),
+        "{args:?}: expected {expect:?} in {err:?}"
+    );
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "{args:?}: one line expected: {err}"
+    );
+}
+
+#[test]
+fn render_is_identical_for_threads_and_tiles() {
+    let dir = scratch("identical");
+    let mut files = Vec::new();
+    for (threads, tile) in [("1", "64"), ("2", "64"), ("2", "16"), ("1", "16")] {
+        let out = dir.join(format!("t{threads}-{tile}.png"));
+        let o = pelage(&[
+            "render",
+            "--width",
+            "200",
+            "--height",
+            "150",
+            "--threads",
+            threads,
+            "--tile",
+            tile,
+            "-o",
+            out.to_str().expect("utf-8 path"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        files.push(std::fs::read(&out).expect("png"));
+    }
+    assert!(
+        files.iter().all(|f| f == &files[0]),
+        "renders differ across --threads/--tile"
+    );
+    let img = image::load_from_memory(&files[0])
+        .expect("decodes")
+        .to_rgba8();
+    assert_eq!((img.width(), img.height()), (200, 150));
+    // The furred torus covers the middle of the image; the corners are background.
+    assert_ne!(img.get_pixel(100, 90), img.get_pixel(2, 2));
+}
+
+#[test]
+fn absurd_sizes_and_arguments_are_refused() {
+    let out = scratch("sizes").join("x.png");
+    let o = out.to_str().expect("utf-8 path");
+    refused(&["render", "--width", "0", "-o", o], "image.width = 0");
+    refused(
+        &["render", "--height", "100000", "-o", o],
+        "image.height = 100000",
+    );
+    refused(
+        &["render", "--width", "16000", "--height", "16000", "-o", o],
+        "pixels exceeds",
+    );
+    refused(&["render", "--tile", "7", "-o", o], "--tile");
+    assert!(!out.exists(), "nothing is written for refused input");
+}
+
+#[test]
+fn bad_scenes_name_file_line_and_key() {
+    let dir = scratch("scenes");
+    let zero = write(
+        &dir,
+        "zero.toml",
+        "[fur]\nnumber_of_strands = 10\nnumber_of_shells = 0\n",
+    );
+    refused(
+        &["render", zero.to_str().expect("path")],
+        "zero.toml:3: fur.number_of_shells = 0",
+    );
+    let negative = write(&dir, "negative.toml", "[fur]\nmodel_difference = -0.5\n");
+    refused(
+        &["render", negative.to_str().expect("path")],
+        "negative.toml:2: fur.model_difference",
+    );
+    let unknown = write(&dir, "unknown.toml", "[camera]\nfov = 30\n");
+    refused(
+        &["render", unknown.to_str().expect("path")],
+        "unknown.toml:2",
+    );
+    let broken = write(&dir, "broken.toml", "[image\nwidth = 3\n");
+    refused(&["render", broken.to_str().expect("path")], "broken.toml:1");
+    refused(
+        &["render", dir.join("absent.toml").to_str().expect("path")],
+        "absent.toml",
+    );
+}
+
+#[test]
+fn bad_meshes_are_clear_errors() {
+    let dir = scratch("meshes");
+    let missing = write(
+        &dir,
+        "missing.toml",
+        "[mesh]\nkind = \"obj\"\npath = \"nowhere.obj\"\n",
+    );
+    refused(&["render", missing.to_str().expect("path")], "nowhere.obj");
+    write(&dir, "empty.obj", "# no faces\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let empty = write(
+        &dir,
+        "empty.toml",
+        "[mesh]\nkind = \"obj\"\npath = \"empty.obj\"\n",
+    );
+    refused(&["render", empty.to_str().expect("path")], "empty.obj");
+    write(&dir, "nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+    let nan = write(
+        &dir,
+        "nan.toml",
+        "[mesh]\nkind = \"obj\"\npath = \"nan.obj\"\n",
+    );
+    refused(&["render", nan.to_str().expect("path")], "nan.obj");
+}
+
+#[test]
+fn an_obj_without_uvs_renders_with_a_warning() {
+    let dir = scratch("obj");
+    let cube = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+                f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    write(&dir, "cube.obj", cube);
+    let scene = write(
+        &dir,
+        "cube.toml",
+        "[image]\nwidth = 96\nheight = 72\n[camera]\neye = [3.0, 3.0, 4.0]\n[mesh]\nkind = \"obj\"\npath = \"cube.obj\"\n[fur]\nnumber_of_strands = 200\nmodel_difference = 0.2\n",
+    );
+    let out = dir.join("cube.png");
+    let o = pelage(&[
+        "render",
+        scene.to_str().expect("path"),
+        "-o",
+        out.to_str().expect("path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning"), "{}", stderr(&o));
+    assert!(out.exists());
+}
+
+#[test]
+fn bench_reports_json() {
+    let o = pelage(&[
+        "bench", "--width", "64", "--height", "48", "--frames", "2", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for key in [
+        "\"bake_ms\"",
+        "\"median_frame_ms\"",
+        "\"fps\"",
+        "\"fragments_per_s\"",
+    ] {
+        assert!(text.contains(key), "{key} missing from {text}");
+    }
+}
