@@ -52,9 +52,22 @@ struct CommonArgs {
 struct RenderArgs {
     #[command(flatten)]
     common: CommonArgs,
-    /// Output PNG.
+    /// Output PNG; with --frames, the folder the numbered frames go to.
     #[arg(short, long, default_value = "pelage.png")]
     output: PathBuf,
+    /// Render this instant (seconds) instead of the scene's `time`.
+    #[arg(long, allow_negative_numbers = true)]
+    time: Option<f32>,
+    /// Render an animation of N frames: frame k is the instant k / fps, written as
+    /// OUTPUT/frame_0000.png, frame_0001.png, ...
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: Option<u32>,
+    /// Frames per second of the animation.
+    #[arg(long, default_value_t = 10.0)]
+    fps: f32,
+    /// Also write the animation as an animated GIF to this path.
+    #[arg(long, requires = "frames")]
+    animation: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -135,8 +148,20 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
 }
 
 fn render(args: RenderArgs) -> Result<(), Failure> {
-    let scene = load_scene(&args.common)?;
+    let mut scene = load_scene(&args.common)?;
+    if let Some(t) = args.time {
+        if !t.is_finite() {
+            return Err(Failure {
+                message: format!("--time {t} must be a finite number of seconds"),
+                status: 2,
+            });
+        }
+        scene.time = t;
+    }
     let tile = args.common.tile;
+    if let Some(frames) = args.frames {
+        return render_animation(&scene, &args, frames, tile);
+    }
     let image = with_threads(args.common.threads, || {
         let bar = spinner("baking fur textures");
         let prepared = PreparedScene::new(&scene)?;
@@ -148,6 +173,71 @@ fn render(args: RenderArgs) -> Result<(), Failure> {
     write_png(&args.output, image.width, image.height, &image.rgba8)?;
     for warning in &image.warnings {
         eprintln!("warning: {warning}");
+    }
+    Ok(())
+}
+
+/// Frames 0..n at t = k / fps into the output folder (and an animated GIF when asked).
+fn render_animation(
+    scene: &Scene,
+    args: &RenderArgs,
+    frames: u32,
+    tile: u32,
+) -> Result<(), Failure> {
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
+        return Err(Failure {
+            message: format!("--fps {} must be in (0, 1000]", args.fps),
+            status: 2,
+        });
+    }
+    std::fs::create_dir_all(&args.output).map_err(|e| Failure {
+        message: format!(
+            "{}: cannot create the frame folder: {e}",
+            args.output.display()
+        ),
+        status: 1,
+    })?;
+    let fps = args.fps;
+    let dir = args.output.clone();
+    let keep_for_gif = args.animation.is_some();
+    let (images, warnings) = with_threads(args.common.threads, || -> Result<_, Failure> {
+        let prepared = PreparedScene::new(scene)?;
+        let bar = if std::io::stderr().is_terminal() {
+            indicatif::ProgressBar::new(u64::from(frames))
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        let mut kept = Vec::new();
+        let mut warnings = Vec::new();
+        for k in 0..frames {
+            let image = prepared.render_at(k as f32 / fps, tile)?;
+            write_png(
+                &dir.join(format!("frame_{k:04}.png")),
+                image.width,
+                image.height,
+                &image.rgba8,
+            )?;
+            warnings = image.warnings.clone();
+            if keep_for_gif {
+                kept.push(image);
+            }
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        Ok((kept, warnings))
+    })??;
+    for warning in &warnings {
+        eprintln!("warning: {warning}");
+    }
+    if let Some(path) = &args.animation {
+        let frames: Vec<(u32, u32, Vec<u8>)> = images
+            .into_iter()
+            .map(|i| (i.width, i.height, i.rgba8))
+            .collect();
+        pelage::output::write_gif(path, &frames, fps).map_err(|e| Failure {
+            message: e.to_string(),
+            status: 1,
+        })?;
     }
     Ok(())
 }
@@ -218,6 +308,10 @@ fn main() -> ExitCode {
             tile: pelage::raster::DEFAULT_TILE_SIZE,
         },
         output: PathBuf::from("pelage.png"),
+        time: None,
+        frames: None,
+        fps: 10.0,
+        animation: None,
     }));
     let result = match command {
         Command::Render(args) => render(args),

@@ -68,6 +68,29 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
     write_atomic(path, &bytes)
 }
 
+/// Writes frames (width, height, RGBA8) as a looping animated GIF at `fps`, atomically. GIF
+/// delays are whole hundredths of a second: `round(100 / fps)`, at least 1. Colours are reduced
+/// to a 256-colour palette per frame by the `gif` crate's deterministic quantiser.
+pub fn write_gif(path: &Path, frames: &[(u32, u32, Vec<u8>)], fps: f32) -> Result<(), OutputError> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = image::codecs::gif::GifEncoder::new(&mut bytes);
+        encoder
+            .set_repeat(image::codecs::gif::Repeat::Infinite)
+            .map_err(|e| error(path, e))?;
+        let hundredths = (100.0 / fps).round().max(1.0) as u32;
+        for (width, height, rgba) in frames {
+            let buffer = image::RgbaImage::from_raw(*width, *height, rgba.clone())
+                .ok_or_else(|| error(path, "frame size does not match its pixels"))?;
+            let delay = image::Delay::from_numer_denom_ms(hundredths * 10, 1);
+            encoder
+                .encode_frame(image::Frame::from_parts(buffer, 0, 0, delay))
+                .map_err(|e| error(path, e))?;
+        }
+    }
+    write_atomic(path, &bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -58,17 +58,53 @@ fn load_scene(name: &str) -> Scene {
     scene
 }
 
-fn check_scene(name: &str) {
-    let scene = load_scene(name);
+fn blessing() -> bool {
+    std::env::var_os("PELAGE_BLESS").is_some()
+}
+
+/// Which picture of a scene a reference holds.
+#[derive(Clone, Copy, Debug)]
+enum Variant {
+    /// The scene as written.
+    AsWritten,
+    /// The scene at another instant, seconds.
+    Time(f32),
+    /// The camera moved along its line of sight to this distance from its target.
+    Distance(f32),
+}
+
+impl Variant {
+    fn apply(self, scene: &mut Scene) {
+        match self {
+            Variant::AsWritten => {}
+            Variant::Time(t) => scene.time = t,
+            Variant::Distance(d) => {
+                let c = &mut scene.camera;
+                c.eye = c.target + (c.eye - c.target).normalize() * d;
+            }
+        }
+    }
+
+    fn file_name(self, name: &str) -> String {
+        match self {
+            Variant::AsWritten => format!("{name}.png"),
+            Variant::Time(t) => format!("{name}@t{t}.png"),
+            Variant::Distance(d) => format!("{name}@d{d}.png"),
+        }
+    }
+}
+
+fn check_scene(name: &str, variant: Variant) {
+    let mut scene = load_scene(name);
+    variant.apply(&mut scene);
+    let file = variant.file_name(name);
     let actual = render(&scene, 64);
-    let reference = root().join("reference_images").join(format!("{name}.png"));
-    if std::env::var_os("PELAGE_BLESS").is_some() {
+    let reference = root().join("reference_images").join(&file);
+    if blessing() {
         pelage::output::write_png(&reference, scene.image.width, scene.image.height, &actual)
             .expect("write reference");
-        panic!(
-            "PELAGE_BLESS is set: wrote {}; unset it and rerun",
-            reference.display()
-        );
+        eprintln!("wrote {}", reference.display());
+        return;
     }
     let expected = image::open(&reference)
         .unwrap_or_else(|e| {
@@ -81,7 +117,7 @@ fn check_scene(name: &str) {
     assert_eq!(
         (expected.width(), expected.height()),
         (scene.image.width, scene.image.height),
-        "{name}: reference size differs"
+        "{file}: reference size differs"
     );
     if expected.as_raw() != &actual {
         let differing = expected
@@ -90,24 +126,27 @@ fn check_scene(name: &str) {
             .zip(actual.chunks(4))
             .filter(|(a, b)| a != b)
             .count();
+        let stem = file.trim_end_matches(".png");
         let diff = write_diff(
-            name,
+            stem,
             scene.image.width,
             scene.image.height,
             expected.as_raw(),
             &actual,
         );
         panic!(
-            "{name}: {differing} pixels differ from {}; see {}",
+            "{file}: {differing} pixels differ from {}; see {}",
             reference.display(),
             diff.display()
         );
     }
 }
 
-/// Every scene also renders byte-identically with other thread counts and tile sizes.
-fn check_invariance(name: &str) {
-    let scene = load_scene(name);
+/// Every scene also renders byte-identically with other thread counts and tile sizes (at its
+/// most demanding variant: the latest instant, the nearest distance).
+fn check_invariance(name: &str, variant: Variant) {
+    let mut scene = load_scene(name);
+    variant.apply(&mut scene);
     let prepared = PreparedScene::new(&scene).expect("prepares");
     let reference = prepared.render(64).expect("renders").rgba8;
     for threads in [1, 2, 8] {
@@ -129,22 +168,38 @@ fn check_invariance(name: &str) {
     }
 }
 
+/// `name => "file"` checks the scene as written; `name => "file" at times [..]` or
+/// `at distances [..]` checks one reference per instant or camera distance.
 macro_rules! golden {
-    ($($name:ident => $file:literal),* $(,)?) => {
+    ($($name:ident => $file:literal $(at $kind:ident [$($v:expr),+])?),* $(,)?) => {
         $(
             mod $name {
+                #[allow(unused_imports)]
+                use super::Variant;
+                fn variants() -> Vec<Variant> {
+                    golden!(@variants $($kind [$($v),+])?)
+                }
                 #[test]
                 fn matches_reference() {
-                    super::check_scene($file);
+                    for v in variants() {
+                        super::check_scene($file, v);
+                    }
+                    // A blessing run writes every reference, then fails on purpose so that it is
+                    // never mistaken for a passing one.
+                    assert!(!super::blessing(), "PELAGE_BLESS is set: references written; unset it and rerun");
                 }
                 #[test]
                 fn identical_for_threads_and_tiles() {
-                    super::check_invariance($file);
+                    let last = *variants().last().expect("a variant");
+                    super::check_invariance($file, last);
                 }
             }
         )*
         const LISTED: &[&str] = &[$($file),*];
     };
+    (@variants) => { vec![Variant::AsWritten] };
+    (@variants times [$($v:expr),+]) => { vec![$(Variant::Time($v)),+] };
+    (@variants distances [$($v:expr),+]) => { vec![$(Variant::Distance($v)),+] };
 }
 
 golden! {
@@ -153,6 +208,11 @@ golden! {
     specular => "specular",
     leg => "leg",
     thesis_4_2 => "thesis-4-2",
+    cow => "cow",
+    spots => "spots",
+    wind => "wind" at times [0.0, 0.5, 1.5],
+    burn => "burn" at times [0.0, 1.0, 3.0, 6.0, 10.0],
+    distance => "distance" at distances [24.0, 17.0, 12.0, 9.0],
 }
 
 #[test]

@@ -1,14 +1,21 @@
-//! The fur fragment closure: the thesis's fragment shader (3.2) as Rust, composed from the pure
-//! terms in [`crate::shading`].
+//! The fur fragment closure: the thesis's fragment shader (3.2–3.4) as Rust, composed from the
+//! pure terms in [`crate::shading`], in this order:
 //!
-//! Texture reads: the colour and tangent maps are read trilinearly at the level of detail of
-//! the fur uv's coarse derivatives; each shadow lookup reads the alpha of one texel, the nearest
-//! one on the mip level nearest that level of detail.
+//! 1. burning (3.4): the matches' lobe intensity `I` and the burn rule for this layer; a burnt
+//!    texel is discarded here, before any texture read, so burnt fur costs less (table 4.6);
+//! 2. the reverse wind lookup (3.3): the texel that lands here is read at `uv − wind_uv`;
+//! 3. colour and tangent maps, read trilinearly at the level of detail of the fur uv's coarse
+//!    derivatives; a transparent texel is discarded before shading;
+//! 4. spots, then stripes (3.2.4), blended into the strand colour, then charring by `1 − I`;
+//! 5. the tangent bent by a fraction of the wind and renormalised (3.3.1);
+//! 6. the shell self-shadow (3.2.2): each lookup reads the alpha of one texel, the nearest on
+//!    the mip level nearest the level of detail, along the shadow offset plus the wind's;
+//! 7. Kajiya–Kay diffuse and specular, the dampened specular, and eq. 3.7.
 
 use crate::raster::texture::level_of_detail;
 use crate::raster::{Fragment, Sampler, Texture, Varyings};
-use crate::scene::{DebugView, Scene};
-use crate::shading::{self, ShadingWeights, SpecularTangents};
+use crate::scene::{DebugView, Scene, SpotKind};
+use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Alpha below which a fur texel is discarded before any shading (half of the smallest
@@ -28,6 +35,14 @@ pub struct FurVaryings {
     pub shadow: Vec2,
     /// Opacity factor: 1 on shells; on fins it fades to 0 towards the ends of the angle window.
     pub fade: f32,
+    /// The skin point under this fragment, object space (spots and stripes are fixed to it).
+    pub object: Vec3,
+    /// The skin normal, object space (light spots and matches are fixed to the object).
+    pub normal: Vec3,
+    /// The wind's uv displacement of this layer: the texel landing here comes from `uv − wind_uv`.
+    pub wind_uv: Vec2,
+    /// The wind vector (direction × force) in tangent space.
+    pub wind: Vec3,
 }
 
 impl Varyings for FurVaryings {
@@ -39,12 +54,119 @@ impl Varyings for FurVaryings {
             eye: Vec3::weighted_sum(&a.eye, wa, &b.eye, wb, &c.eye, wc),
             shadow: Vec2::weighted_sum(&a.shadow, wa, &b.shadow, wb, &c.shadow, wc),
             fade: f32::weighted_sum(&a.fade, wa, &b.fade, wb, &c.fade, wc),
+            object: Vec3::weighted_sum(&a.object, wa, &b.object, wb, &c.object, wc),
+            normal: Vec3::weighted_sum(&a.normal, wa, &b.normal, wb, &c.normal, wc),
+            wind_uv: Vec2::weighted_sum(&a.wind_uv, wa, &b.wind_uv, wb, &c.wind_uv, wc),
+            wind: Vec3::weighted_sum(&a.wind, wa, &b.wind, wb, &c.wind, wc),
         }
     }
 }
 
-/// The scene's shading parameters, resolved once per frame.
+/// A spot, resolved from the scene.
 #[derive(Clone, Copy, Debug)]
+pub enum Spot {
+    /// Inside an ellipsoid.
+    Ellipsoid {
+        /// Centre, object space.
+        centre: Vec3,
+        /// Semi-axes.
+        radii: Vec3,
+        /// Full-colour fraction.
+        inner: f32,
+        /// Colour.
+        colour: Vec3,
+    },
+    /// A lobe of a light fixed to the object.
+    Light {
+        /// Towards the spot light, object space.
+        direction: Vec3,
+        /// Lobe exponent.
+        exponent: f32,
+        /// Intensity of full colour.
+        inner_threshold: f32,
+        /// Intensity where the ring ends.
+        outer_threshold: f32,
+        /// Colour.
+        colour: Vec3,
+    },
+    /// Periodic bands across an axis.
+    Stripe {
+        /// Unit axis.
+        axis: Vec3,
+        /// Band spacing.
+        period: f32,
+        /// Core width.
+        width: f32,
+        /// Blend width.
+        softness: f32,
+        /// Colour.
+        colour: Vec3,
+    },
+}
+
+impl Spot {
+    /// `(colour, weight)` of this spot at an object-space point with normal `normal`.
+    #[inline]
+    pub fn weight_at(&self, object: Vec3, normal: Vec3) -> (Vec3, f32) {
+        match *self {
+            Spot::Ellipsoid {
+                centre,
+                radii,
+                inner,
+                colour,
+            } => (
+                colour,
+                shading::ellipsoid_spot_intensity(object, centre, radii, inner),
+            ),
+            Spot::Light {
+                direction,
+                exponent,
+                inner_threshold,
+                outer_threshold,
+                colour,
+            } => {
+                let lobe = shading::light_spot_intensity(normal, direction, exponent);
+                (
+                    colour,
+                    shading::spot_gradient(lobe, inner_threshold, outer_threshold),
+                )
+            }
+            Spot::Stripe {
+                axis,
+                period,
+                width,
+                softness,
+                colour,
+            } => (
+                colour,
+                shading::stripe_intensity(object.dot(axis), period, width, softness),
+            ),
+        }
+    }
+}
+
+/// The burn state of a frame: the matches and their current exponent.
+#[derive(Clone, Debug)]
+pub struct BurnState {
+    /// Unit directions of the matches, object space.
+    pub matches: Vec<Vec3>,
+    /// The lobe exponent at this instant.
+    pub exponent: f32,
+}
+
+impl BurnState {
+    /// The spot intensity `I` of thesis 3.4: the strongest match lobe at this normal.
+    #[inline]
+    pub fn intensity(&self, normal: Vec3) -> f32 {
+        self.matches
+            .iter()
+            .map(|&m| shading::light_spot_intensity(normal, m, self.exponent))
+            .fold(0.0, f32::max)
+    }
+}
+
+/// The scene's shading parameters and effects, resolved once per frame.
+#[derive(Clone, Debug)]
 pub struct ShadeParams {
     /// Light colour.
     pub light_colour: Vec3,
@@ -64,12 +186,69 @@ pub struct ShadeParams {
     pub weights: ShadingWeights,
     /// Debug view.
     pub debug_view: DebugView,
+    /// Spots, then stripes, in scene order.
+    pub spots: Vec<Spot>,
+    /// Burning, when the matches are lit at this instant.
+    pub burn: Option<BurnState>,
+    /// How much of the wind the tangents take at the tips.
+    pub wind_tangent_fraction: f32,
+}
+
+/// What differs between the layers of one frame.
+#[derive(Clone, Copy, Debug)]
+pub struct LayerParams {
+    /// Shell index (fins count as the top shell).
+    pub index: u32,
+    /// Index of the top shell, `number_of_shells − 1`.
+    pub max_shell: u32,
+    /// Shadow lookups for this layer.
+    pub lookups: u32,
+    /// `index / number_of_shells`: how far up the strand this layer is.
+    pub height_fraction: f32,
 }
 
 impl ShadeParams {
-    /// From a scene.
-    pub fn from_scene(s: &Scene) -> Self {
+    /// From a scene at `time`.
+    pub fn from_scene(s: &Scene, time: f32) -> Self {
         let w = &s.shading.weights;
+        let mut spots: Vec<Spot> = s
+            .spots
+            .iter()
+            .map(|spot| match spot.kind {
+                SpotKind::Ellipsoid => Spot::Ellipsoid {
+                    centre: spot.centre,
+                    radii: spot.radii,
+                    inner: spot.inner,
+                    colour: spot.colour,
+                },
+                SpotKind::Light => Spot::Light {
+                    direction: spot.direction.normalize_or_zero(),
+                    exponent: spot.exponent,
+                    inner_threshold: spot.inner_threshold,
+                    outer_threshold: spot.outer_threshold,
+                    colour: spot.colour,
+                },
+            })
+            .collect();
+        spots.extend(s.stripes.iter().map(|stripe| Spot::Stripe {
+            axis: stripe.axis.normalize_or_zero(),
+            period: stripe.period,
+            width: stripe.width,
+            softness: stripe.softness,
+            colour: stripe.colour,
+        }));
+        let burn = s.burn.as_ref().and_then(|b| {
+            let schedule = shading::BurnSchedule {
+                start: b.start,
+                high_exponent: b.high_exponent,
+                low_exponent: b.low_exponent,
+                spread_duration: b.spread_duration,
+            };
+            shading::burn_exponent(time, &schedule).map(|exponent| BurnState {
+                matches: b.matches.iter().map(|m| m.normalize_or_zero()).collect(),
+                exponent,
+            })
+        });
         ShadeParams {
             light_colour: s.light.colour,
             ambient: s.shading.ambient,
@@ -90,48 +269,78 @@ impl ShadeParams {
                 shadow: w.shadow,
             },
             debug_view: s.shading.debug_view,
+            spots,
+            burn,
+            wind_tangent_fraction: s.wind.as_ref().map_or(0.0, |w| w.tangent_fraction),
+        }
+    }
+
+    /// The burn outcome for a layer at this normal (Unburnt when nothing burns).
+    #[inline]
+    pub fn burn_outcome(&self, normal: Vec3, layer: &LayerParams) -> BurnOutcome {
+        match &self.burn {
+            Some(b) => shading::burn_rule(b.intensity(normal), layer.index, layer.max_shell),
+            None => BurnOutcome::Unburnt,
         }
     }
 }
 
-/// Shades one fur fragment of a shell (or fin) layer: texture reads, Kajiya–Kay diffuse and
-/// specular, dampened specular, shell self-shadow with `lookups` reads, eq. 3.7. Transparent
-/// texels are discarded before any shading.
+/// Shades one fur fragment of a shell (or fin) layer; `None` discards it.
 #[inline]
 pub fn shade_fur(
     f: &Fragment<FurVaryings>,
     colour_map: &Texture,
     tangent_map: &Texture,
     sampler: Sampler,
-    lookups: u32,
+    layer: &LayerParams,
     p: &ShadeParams,
 ) -> Option<Vec4> {
     let v = f.varyings();
+    let burn = p.burn_outcome(v.normal, layer);
+    if burn == BurnOutcome::Burnt {
+        return None;
+    }
+    let uv = v.uv - v.wind_uv;
     let (ddx, ddy) = f.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, colour_map.width(), colour_map.height());
-    let texel = sampler.sample_level(colour_map, v.uv, lod);
+    let texel = sampler.sample_level(colour_map, uv, lod);
     let alpha = texel.w * v.fade;
     // NaN alpha is discarded too.
     if alpha.is_nan() || alpha < ALPHA_DISCARD {
         return None;
     }
-    let encoded = sampler.sample_level(tangent_map, v.uv, lod);
+    let encoded = sampler.sample_level(tangent_map, uv, lod);
     if p.debug_view == DebugView::Tangents {
         return Some(encoded.truncate().extend(alpha));
     }
     if p.debug_view == DebugView::Alpha {
         return Some(Vec4::new(1.0, 1.0, 1.0, alpha));
     }
+    let mut strand = texel.truncate();
+    for spot in &p.spots {
+        let (colour, weight) = spot.weight_at(v.object, v.normal);
+        strand = shading::apply_spot(strand, colour, weight);
+    }
+    let strand = burn.strand_colour(strand);
     let tangent = (encoded.truncate() * 2.0 - Vec3::ONE).normalize_or(Vec3::Z);
+    let tangent = if p.wind_tangent_fraction > 0.0 {
+        shading::bend_tangent(
+            tangent,
+            v.wind,
+            layer.height_fraction * p.wind_tangent_fraction,
+        )
+    } else {
+        tangent
+    };
     let light = v.light.normalize_or_zero();
     let eye = v.eye.normalize_or_zero();
-    // The thesis checks "if the according pixel is transparent": one texel per lookup, the
-    // nearest of the mip level closest to this fragment's level of detail.
+    // The thesis checks "if the according pixel is transparent": one texel per lookup. Wind
+    // moves the fur above this layer further, so its displacement adds to the lookup (3.3.1).
     let shadow = shading::shell_shadow(
-        |uv| sampler.sample_nearest_level(colour_map, uv, lod).w,
-        v.uv,
-        v.shadow,
-        lookups,
+        |at| sampler.sample_nearest_level(colour_map, at, lod).w,
+        uv,
+        v.shadow + v.wind_uv,
+        layer.lookups,
     );
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
@@ -154,7 +363,7 @@ pub fn shade_fur(
         p.dampened_exponent,
     ));
     let colour = shading::final_colour(
-        texel.truncate(),
+        strand,
         p.light_colour,
         p.ambient,
         diffuse,

@@ -22,7 +22,7 @@ use crate::raster::{
     Framebuffer, RasterError, RasterStats, Sampler, Texture,
 };
 use crate::scene::{MeshKind, Scene, ShellSpacingSetting};
-use fragment::{FurVaryings, ShadeParams};
+use fragment::{FurVaryings, LayerParams, ShadeParams};
 use glam::{Vec2, Vec3, Vec4};
 
 /// What can go wrong preparing or drawing a scene.
@@ -254,8 +254,14 @@ impl PreparedScene {
         &self.mesh
     }
 
-    /// Draws one frame with the given tile size.
+    /// Draws one frame at the scene's own time with the given tile size.
     pub fn render(&self, tile_size: u32) -> Result<RenderedImage, RenderError> {
+        self.render_at(self.scene.time, tile_size)
+    }
+
+    /// Draws one frame at `time` (seconds) with the given tile size. Frame `k` of an animation
+    /// at `fps` frames per second is `render_at(k as f32 / fps as f32, …)`.
+    pub fn render_at(&self, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
         let s = &self.scene;
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
@@ -270,12 +276,34 @@ impl PreparedScene {
         let view_proj = camera.view_projection(width as f32 / height as f32);
         let light = s.light.direction.normalize_or_zero();
         let repeat = Vec2::from(s.fur.texture_repeat);
-        let shade = ShadeParams::from_scene(s);
+        let shade = ShadeParams::from_scene(s, time);
+        let shade = &shade;
+        let wind = s.wind.as_ref().map(|w| {
+            let params = crate::shading::WindParams {
+                direction: w.direction,
+                strength: w.strength,
+                frequency: w.frequency,
+                elasticity: w.elasticity,
+                max_bend: w.max_bend,
+            };
+            (
+                w.direction.normalize_or_zero(),
+                crate::shading::wind_force(time, &params),
+            )
+        });
+        let n = s.fur.number_of_shells;
+        let max_shell = n - 1;
         let mut frame = Frame::new(&mut fb);
 
-        // The skin: opaque, writes depth.
+        // The skin: opaque, writes depth; charred where the fur burns.
         let skin_colour = s.fur.colour * 0.35;
         let debug = s.shading.debug_view != crate::scene::DebugView::None;
+        let skin_layer = LayerParams {
+            index: 0,
+            max_shell,
+            lookups: 0,
+            height_fraction: 0.0,
+        };
         frame.draw(
             &self.mesh.vertices,
             &self.mesh.indices,
@@ -292,7 +320,10 @@ impl PreparedScene {
                     return Some(Vec4::new(0.0, 0.0, 0.0, 1.0));
                 }
                 let n = f.varyings().normalize_or_zero();
-                Some((skin_colour * (0.5 + 0.5 * n.dot(light).max(0.0))).extend(1.0))
+                let colour = shade
+                    .burn_outcome(n, &skin_layer)
+                    .strand_colour(skin_colour);
+                Some((colour * (0.5 + 0.5 * n.dot(light).max(0.0))).extend(1.0))
             },
         )?;
 
@@ -308,19 +339,47 @@ impl PreparedScene {
             address_v: AddressMode::Wrap,
             filter: Filter::Trilinear,
         };
-        let n = s.fur.number_of_shells;
         let difference = s.fur.model_difference;
-        for (i, layer) in self.shells.iter().enumerate() {
+        let eye = camera.eye;
+        for (i, textures) in self.shells.iter().enumerate() {
             let offset = self.shell_offsets[i];
-            let eye = camera.eye;
-            let lookups =
-                crate::shading::shadow_lookup_count(n, i as u32, s.shading.shadow_divisor);
+            let layer = LayerParams {
+                index: i as u32,
+                max_shell,
+                lookups: crate::shading::shadow_lookup_count(n, i as u32, s.shading.shadow_divisor),
+                height_fraction: i as f32 / n as f32,
+            };
             frame.draw(
                 &self.mesh.vertices,
                 &self.mesh.indices,
                 blended,
                 move |v: &mesh::Vertex| {
-                    let p = v.position + v.normal * offset;
+                    // Wind (thesis 3.3): the layer moves with the wind's surface-tangent part,
+                    // more the higher it is, pulled back along −n so the strand keeps its length.
+                    let (displacement, wind_uv, wind_ts) = match wind {
+                        Some((direction, force)) => {
+                            let d = crate::shading::wind_displacement(
+                                direction,
+                                v.normal,
+                                force,
+                                layer.height_fraction,
+                                difference,
+                            );
+                            let uv = crate::shading::wind_uv_offset(
+                                d,
+                                v.normal,
+                                v.dpdu / repeat.x,
+                                v.dpdv / repeat.y,
+                            );
+                            (
+                                d,
+                                uv,
+                                crate::shading::to_tangent_space(direction * force, &v.frame),
+                            )
+                        }
+                        None => (Vec3::ZERO, Vec2::ZERO, Vec3::ZERO),
+                    };
+                    let p = v.position + v.normal * offset + displacement;
                     let change =
                         crate::shading::shadow_change(light, v.frame.normal, difference - offset);
                     ClipVertex {
@@ -335,29 +394,40 @@ impl PreparedScene {
                                 v.dpdv / repeat.y,
                             ),
                             fade: 1.0,
+                            object: v.position,
+                            normal: v.normal,
+                            wind_uv,
+                            wind: wind_ts,
                         },
                     }
                 },
                 move |f| {
                     fragment::shade_fur(
                         f,
-                        &layer.colour,
-                        &layer.tangent,
+                        &textures.colour,
+                        &textures.tangent,
                         shell_sampler,
-                        lookups,
-                        &shade,
+                        &layer,
+                        shade,
                     )
                 },
             )?;
         }
 
-        // Fins at the silhouette.
+        // Fins at the silhouette; they stand for the fur's full height, so they burn as the
+        // top shell does.
         if let Some(fin) = &self.fin {
-            let (vertices, triangles) = self.fin_geometry(camera.eye, light);
+            let (vertices, triangles) = self.fin_geometry(camera.eye, light, wind);
             let fin_sampler = Sampler {
                 address_u: AddressMode::Wrap,
                 address_v: AddressMode::Clamp,
                 filter: Filter::Trilinear,
+            };
+            let fin_layer = LayerParams {
+                index: max_shell,
+                max_shell,
+                lookups: 0,
+                height_fraction: 1.0,
             };
             frame.draw(
                 &vertices,
@@ -370,7 +440,16 @@ impl PreparedScene {
                     position: view_proj * p.extend(1.0),
                     varyings: v,
                 },
-                move |f| fragment::shade_fur(f, &fin.colour, &fin.tangent, fin_sampler, 0, &shade),
+                move |f| {
+                    fragment::shade_fur(
+                        f,
+                        &fin.colour,
+                        &fin.tangent,
+                        fin_sampler,
+                        &fin_layer,
+                        shade,
+                    )
+                },
             )?;
         }
 
@@ -385,9 +464,21 @@ impl PreparedScene {
     }
 
     /// Fin quads for this eye: one per silhouette edge, from the skin up to the fin height along
-    /// the vertex normals. Their frame: x along the edge (texture u), z up the averaged normal
+    /// the vertex normals, the top edge moved by the wind like the top shell. Their frame: x along the edge (texture u), z up the averaged normal
     /// (texture v), y = z × x.
-    fn fin_geometry(&self, eye: Vec3, light: Vec3) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
+    fn fin_geometry(
+        &self,
+        eye: Vec3,
+        light: Vec3,
+        wind: Option<(Vec3, f32)>,
+    ) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
+        // The wind bends a fin's top edge as it bends the top shell.
+        let bend = |normal: Vec3| match wind {
+            Some((direction, force)) => {
+                crate::shading::wind_displacement(direction, normal, force, 1.0, self.fin_height)
+            }
+            None => Vec3::ZERO,
+        };
         let windows = mesh::fins::FinWindows {
             windows: self
                 .scene
@@ -426,21 +517,23 @@ impl PreparedScene {
             let u0 = (a.uv * repeat).element_sum();
             let u1 = u0 + length / self.tile_world_size.x;
             let corners = [
-                (a.position, a.normal, Vec2::new(u0, 0.0)),
-                (b.position, b.normal, Vec2::new(u1, 0.0)),
+                (a.position, a.position, a.normal, Vec2::new(u0, 0.0)),
+                (b.position, b.position, b.normal, Vec2::new(u1, 0.0)),
                 (
-                    b.position + b.normal * self.fin_height,
+                    b.position + b.normal * self.fin_height + bend(b.normal),
+                    b.position,
                     b.normal,
                     Vec2::new(u1, 1.0),
                 ),
                 (
-                    a.position + a.normal * self.fin_height,
+                    a.position + a.normal * self.fin_height + bend(a.normal),
+                    a.position,
                     a.normal,
                     Vec2::new(u0, 1.0),
                 ),
             ];
             let base = vertices.len() as u32;
-            for (p, n, uv) in corners {
+            for (p, root, n, uv) in corners {
                 vertices.push((
                     p,
                     FurVaryings {
@@ -449,6 +542,10 @@ impl PreparedScene {
                         eye: crate::shading::to_tangent_space(eye - p, &frame),
                         shadow: Vec2::ZERO,
                         fade: fin_fade(&self.scene.fur.fin_windows, eye - p, n),
+                        object: root,
+                        normal: n,
+                        wind_uv: Vec2::ZERO,
+                        wind: Vec3::ZERO,
                     },
                 ));
             }

@@ -47,6 +47,16 @@ pub struct Scene {
     pub shading: ShadingSettings,
     /// The directional light.
     pub light: LightSettings,
+    /// The instant rendered, seconds (wind and burning depend on it).
+    pub time: f32,
+    /// Spots (thesis 3.2.4), applied in order, a later spot over an earlier one.
+    pub spots: Vec<SpotSettings>,
+    /// Stripes (thesis 3.2.4, figure 3.14), applied after the spots.
+    pub stripes: Vec<StripeSettings>,
+    /// Wind (thesis 3.3); absent means still air.
+    pub wind: Option<WindSettings>,
+    /// Burning (thesis 3.4); absent means no fire.
+    pub burn: Option<BurnSettings>,
     /// Directory relative paths are resolved against (the scene file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -62,6 +72,11 @@ impl Default for Scene {
             fur: FurSettings::default(),
             shading: ShadingSettings::default(),
             light: LightSettings::default(),
+            time: 0.0,
+            spots: Vec::new(),
+            stripes: Vec::new(),
+            wind: None,
+            burn: None,
             base_dir: PathBuf::from("."),
         }
     }
@@ -359,6 +374,145 @@ impl Default for LightSettings {
         LightSettings {
             direction: Vec3::new(0.9, 0.7, 0.3),
             colour: Vec3::ONE,
+        }
+    }
+}
+
+/// How a spot decides where it is (thesis 3.2.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SpotKind {
+    /// Inside an ellipsoid in object space.
+    #[default]
+    Ellipsoid,
+    /// Where a light fixed to the object would make a specular lobe.
+    Light,
+}
+
+/// `[[spots]]`: one spot. The inner part takes the full spot colour, a ring blends back to the fur.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SpotSettings {
+    /// Geometric (ellipsoid) or light-based.
+    pub kind: SpotKind,
+    /// Spot colour, RGB.
+    pub colour: Vec3,
+    /// Ellipsoid: centre, object space.
+    pub centre: Vec3,
+    /// Ellipsoid: semi-axes.
+    pub radii: Vec3,
+    /// Ellipsoid: the full-colour inner part, as a fraction of the radii (0..=1).
+    pub inner: f32,
+    /// Light: direction of the light fixed to the object.
+    pub direction: Vec3,
+    /// Light: exponent of the lobe (larger is smaller).
+    pub exponent: f32,
+    /// Light: lobe intensity from which the colour is full.
+    pub inner_threshold: f32,
+    /// Light: lobe intensity where the ring ends.
+    pub outer_threshold: f32,
+}
+
+impl Default for SpotSettings {
+    fn default() -> Self {
+        SpotSettings {
+            kind: SpotKind::Ellipsoid,
+            colour: Vec3::new(0.85, 0.8, 0.7),
+            centre: Vec3::ZERO,
+            radii: Vec3::ONE,
+            inner: 0.6,
+            direction: Vec3::Y,
+            exponent: 20.0,
+            inner_threshold: 0.7,
+            outer_threshold: 0.3,
+        }
+    }
+}
+
+/// `[[stripes]]`: periodic bands along an object-space axis.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StripeSettings {
+    /// Stripe colour.
+    pub colour: Vec3,
+    /// The bands run across this object-space direction.
+    pub axis: Vec3,
+    /// Distance between stripe centres, object units.
+    pub period: f32,
+    /// Width of the full-colour core, object units.
+    pub width: f32,
+    /// Width of the blend on each side, object units.
+    pub softness: f32,
+}
+
+impl Default for StripeSettings {
+    fn default() -> Self {
+        StripeSettings {
+            colour: Vec3::new(0.92, 0.9, 0.86),
+            axis: Vec3::X,
+            period: 4.0,
+            width: 0.8,
+            softness: 0.3,
+        }
+    }
+}
+
+/// `[wind]` (thesis 3.3).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WindSettings {
+    /// Direction the wind blows towards.
+    pub direction: Vec3,
+    /// Gust strength (bend, as the sine of the bend angle, before limiting).
+    pub strength: f32,
+    /// Gusts per second.
+    pub frequency: f32,
+    /// How fast the elastic vibration dies within a gust.
+    pub elasticity: f32,
+    /// Largest bend, as the sine of the bend angle (0..=1).
+    pub max_bend: f32,
+    /// How much of the wind the strand tangents take at the tips (thesis 3.3.1).
+    pub tangent_fraction: f32,
+}
+
+impl Default for WindSettings {
+    fn default() -> Self {
+        WindSettings {
+            direction: Vec3::X,
+            strength: 0.6,
+            frequency: 0.5,
+            elasticity: 3.0,
+            max_bend: 0.6,
+            tangent_fraction: 0.5,
+        }
+    }
+}
+
+/// `[burn]` (thesis 3.4): matches are spot lights fixed to the object; their exponent follows a
+/// schedule, so the burnt area appears at `start` and then spreads.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BurnSettings {
+    /// Direction of each match from the object's centre (object space).
+    pub matches: Vec<Vec3>,
+    /// When the matches light, seconds.
+    pub start: f32,
+    /// Exponent right after `start`: only the area nearest the match burns.
+    pub high_exponent: f32,
+    /// Exponent after `spread_duration`: the burnt area's final size.
+    pub low_exponent: f32,
+    /// Seconds from `start` over which the exponent falls.
+    pub spread_duration: f32,
+}
+
+impl Default for BurnSettings {
+    fn default() -> Self {
+        BurnSettings {
+            matches: vec![Vec3::Y],
+            start: 0.0,
+            high_exponent: 200.0,
+            low_exponent: 4.0,
+            spread_duration: 10.0,
         }
     }
 }

@@ -242,6 +242,80 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         range_f32(key, v, 0.0, 100.0)?;
     }
 
+    range_f32("time", scene.time, -1.0e6, 1.0e6)?;
+    for (k, spot) in scene.spots.iter().enumerate() {
+        let key = |name: &str| format!("spots[{k}].{name}");
+        colour(&key("colour"), spot.colour)?;
+        match spot.kind {
+            super::SpotKind::Ellipsoid => {
+                finite_vec(&key("centre"), spot.centre)?;
+                if !spot.radii.is_finite() || spot.radii.min_element() <= 0.0 {
+                    return Err((
+                        key("radii"),
+                        format!("{} = {} must be positive", key("radii"), spot.radii),
+                    ));
+                }
+                range_f32(&key("inner"), spot.inner, 0.0, 1.0)?;
+            }
+            super::SpotKind::Light => {
+                nonzero(&key("direction"), spot.direction)?;
+                range_f32(&key("exponent"), spot.exponent, 0.0, 10_000.0)?;
+                range_f32(&key("inner_threshold"), spot.inner_threshold, 0.0, 1.0)?;
+                range_f32(&key("outer_threshold"), spot.outer_threshold, 0.0, 1.0)?;
+                if spot.outer_threshold > spot.inner_threshold {
+                    return Err((
+                        key("outer_threshold"),
+                        format!(
+                            "{} must not exceed {}",
+                            key("outer_threshold"),
+                            key("inner_threshold")
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    for (k, stripe) in scene.stripes.iter().enumerate() {
+        let key = |name: &str| format!("stripes[{k}].{name}");
+        colour(&key("colour"), stripe.colour)?;
+        nonzero(&key("axis"), stripe.axis)?;
+        positive(&key("period"), stripe.period)?;
+        range_f32(&key("width"), stripe.width, 0.0, stripe.period)?;
+        range_f32(&key("softness"), stripe.softness, 0.0, stripe.period)?;
+    }
+    if let Some(w) = &scene.wind {
+        nonzero("wind.direction", w.direction)?;
+        range_f32("wind.strength", w.strength, 0.0, 10.0)?;
+        range_f32("wind.frequency", w.frequency, 0.0, 100.0)?;
+        range_f32("wind.elasticity", w.elasticity, 0.0, 1000.0)?;
+        range_f32("wind.max_bend", w.max_bend, 0.0, 1.0)?;
+        range_f32("wind.tangent_fraction", w.tangent_fraction, 0.0, 10.0)?;
+    }
+    if let Some(b) = &scene.burn {
+        if b.matches.is_empty() {
+            return Err((
+                "burn.matches".into(),
+                "burn.matches must list at least one match".into(),
+            ));
+        }
+        for (k, m) in b.matches.iter().enumerate() {
+            nonzero(&format!("burn.matches[{k}]"), *m)?;
+        }
+        range_f32("burn.start", b.start, -1.0e6, 1.0e6)?;
+        range_f32("burn.high_exponent", b.high_exponent, 0.0, 100_000.0)?;
+        range_f32("burn.low_exponent", b.low_exponent, 0.0, 100_000.0)?;
+        if b.low_exponent > b.high_exponent {
+            return Err((
+                "burn.low_exponent".into(),
+                format!(
+                    "burn.low_exponent = {} must not exceed burn.high_exponent = {}: the schedule falls from high to low",
+                    b.low_exponent, b.high_exponent
+                ),
+            ));
+        }
+        range_f32("burn.spread_duration", b.spread_duration, 0.0, 1.0e6)?;
+    }
+
     nonzero("light.direction", scene.light.direction)?;
     range_f32("light.colour", scene.light.colour.max_element(), 0.0, 100.0)?;
     if scene.light.colour.min_element() < 0.0 {
@@ -257,6 +331,13 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
 /// headers; `None` when the key is not written in the file (a default failed, or an inline
 /// table hides it).
 pub(super) fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
+    // `spots[2].radii`: the key inside the third `[[spots]]` table.
+    if let Some((array, rest)) = dotted.split_once('[')
+        && let Some((index, key)) = rest.split_once("].")
+        && let Ok(index) = index.parse::<usize>()
+    {
+        return line_in_array_table(text, array, index, key);
+    }
     let dotted = dotted.split('[').next().unwrap_or(dotted);
     let (table, key) = match dotted.rsplit_once('.') {
         Some((t, k)) => (t, k),
@@ -286,6 +367,31 @@ pub(super) fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
         }
     }
     table_line
+}
+
+/// The line of `key` in the `index`-th `[[array]]` table (or the table's header line).
+fn line_in_array_table(text: &str, array: &str, index: usize, key: &str) -> Option<usize> {
+    let header = format!("[[{array}]]");
+    let mut seen = 0usize;
+    let mut inside = false;
+    let mut header_line = None;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.starts_with('[') {
+            inside = line == header && {
+                seen += 1;
+                seen == index + 1
+            };
+            if inside {
+                header_line = Some(n + 1);
+            }
+            continue;
+        }
+        if inside && line.split('=').next().unwrap_or("").trim() == key {
+            return Some(n + 1);
+        }
+    }
+    header_line
 }
 
 #[cfg(test)]
@@ -341,5 +447,28 @@ mod tests {
         assert!(err.message.contains("light.direction"), "{err}");
         let err = parse("[fur]\nmodel_difference = nan\n").unwrap_err();
         assert!(err.message.contains("fur.model_difference"), "{err}");
+    }
+
+    #[test]
+    fn effects_are_checked_with_their_keys() {
+        let two_spots =
+            "[[spots]]\nradii = [1, 1, 1]\n\n[[spots]]\ncolour = [1, 1, 1]\nradii = [1, -2, 1]\n";
+        let err = parse(two_spots).unwrap_err();
+        assert!(err.message.contains("spots[1].radii"), "{err}");
+        assert_eq!(err.line, Some(6), "{err}");
+        let err = parse("[burn]\nhigh_exponent = 4.0\nlow_exponent = 50.0\n").unwrap_err();
+        assert!(err.message.contains("burn.low_exponent"), "{err}");
+        assert_eq!(err.line, Some(3));
+        let err = parse("[wind]\nstrength = nan\n").unwrap_err();
+        assert!(err.message.contains("wind.strength"), "{err}");
+        let err = parse("[wind]\ndirection = [0, 0, 0]\n").unwrap_err();
+        assert!(err.message.contains("wind.direction"), "{err}");
+        let err = parse("[[stripes]]\nperiod = -1.0\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].period"), "{err}");
+        let err =
+            parse("[[spots]]\nkind = \"light\"\ninner_threshold = 0.2\nouter_threshold = 0.5\n")
+                .unwrap_err();
+        assert!(err.message.contains("outer_threshold"), "{err}");
+        assert!(parse("time = 2.5\n[wind]\n[burn]\nmatches = [[0, 1, 0], [1, 0, 0]]\n").is_ok());
     }
 }
