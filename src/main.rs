@@ -46,6 +46,9 @@ struct CommonArgs {
     /// Tile size in pixels, even, 2..=1024 (default 64). The image does not depend on it.
     #[arg(long, default_value_t = pelage::raster::DEFAULT_TILE_SIZE)]
     tile: u32,
+    /// Render this instant (seconds) instead of the scene's `time`.
+    #[arg(long, allow_negative_numbers = true)]
+    time: Option<f32>,
 }
 
 #[derive(Args)]
@@ -55,9 +58,6 @@ struct RenderArgs {
     /// Output PNG; with --frames, the folder the numbered frames go to.
     #[arg(short, long, default_value = "pelage.png")]
     output: PathBuf,
-    /// Render this instant (seconds) instead of the scene's `time`.
-    #[arg(long, allow_negative_numbers = true)]
-    time: Option<f32>,
     /// Render an animation of N frames: frame k is the instant k / fps, written as
     /// OUTPUT/frame_0000.png, frame_0001.png, ...
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -116,9 +116,12 @@ fn load_scene(args: &CommonArgs) -> Result<Scene, Failure> {
     if let Some(h) = args.height {
         scene.image.height = h;
     }
+    if let Some(t) = args.time {
+        scene.time = t;
+    }
     scene
         .revalidate(&name)
-        .map_err(|e| bad(format!("{e} (after --width/--height)")))?;
+        .map_err(|e| bad(format!("{e} (after --width/--height/--time)")))?;
     pelage::raster::TileGrid::new(1, 1, args.tile).map_err(|e| bad(format!("--tile: {e}")))?;
     Ok(scene)
 }
@@ -148,16 +151,7 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
 }
 
 fn render(args: RenderArgs) -> Result<(), Failure> {
-    let mut scene = load_scene(&args.common)?;
-    if let Some(t) = args.time {
-        if !t.is_finite() {
-            return Err(Failure {
-                message: format!("--time {t} must be a finite number of seconds"),
-                status: 2,
-            });
-        }
-        scene.time = t;
-    }
+    let scene = load_scene(&args.common)?;
     let tile = args.common.tile;
     if let Some(frames) = args.frames {
         return render_animation(&scene, &args, frames, tile);
@@ -306,9 +300,9 @@ fn main() -> ExitCode {
             height: None,
             threads: None,
             tile: pelage::raster::DEFAULT_TILE_SIZE,
+            time: None,
         },
         output: PathBuf::from("pelage.png"),
-        time: None,
         frames: None,
         fps: 10.0,
         animation: None,

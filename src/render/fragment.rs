@@ -155,6 +155,29 @@ pub struct BurnState {
 }
 
 impl BurnState {
+    /// Whether every fragment of a triangle with these vertex normals is surely burnt away on
+    /// shell `layer` of `max_shell` (so the triangle can be skipped without changing a pixel).
+    ///
+    /// Why it is safe: a fragment's normal is the renormalised convex combination of the vertex
+    /// normals, whose length is at most 1, so its dot with a match `m` is at least the smallest
+    /// vertex dot `c` when `c > 0`; its intensity is then at least `c^e`. The triangle is skipped
+    /// only when `(c − 1e-5)^e` exceeds both 0.1 and `1 − layer/max_shell` by 1e-3, margins far
+    /// above the rounding of the fragment's own computation. The root layer never burns.
+    pub fn surely_burnt(&self, normals: [Vec3; 3], layer: u32, max_shell: u32) -> bool {
+        if layer == 0 || max_shell == 0 {
+            return false;
+        }
+        let needed = 0.1f32.max(1.0 - layer as f32 / max_shell as f32) + 1.0e-3;
+        self.matches.iter().any(|&m| {
+            let c = normals
+                .iter()
+                .map(|n| n.normalize_or_zero().dot(m))
+                .fold(f32::INFINITY, f32::min)
+                - 1.0e-5;
+            c > 0.0 && libm::powf(c.min(1.0), self.exponent) >= needed
+        })
+    }
+
     /// The spot intensity `I` of thesis 3.4: the strongest match lobe at this normal.
     #[inline]
     pub fn intensity(&self, normal: Vec3) -> f32 {

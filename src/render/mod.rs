@@ -349,9 +349,12 @@ impl PreparedScene {
                 lookups: crate::shading::shadow_lookup_count(n, i as u32, s.shading.shadow_divisor),
                 height_fraction: i as f32 / n as f32,
             };
+            // Triangles whose fur is surely burnt away on this layer are not drawn at all: the
+            // image is the same, and burnt fur costs nothing (thesis table 4.6).
+            let kept = self.unburnt_triangles(shade, layer.index, max_shell);
             frame.draw(
                 &self.mesh.vertices,
-                &self.mesh.indices,
+                kept.as_deref().unwrap_or(&self.mesh.indices),
                 blended,
                 move |v: &mesh::Vertex| {
                     // Wind (thesis 3.3): the layer moves with the wind's surface-tangent part,
@@ -417,7 +420,7 @@ impl PreparedScene {
         // Fins at the silhouette; they stand for the fur's full height, so they burn as the
         // top shell does.
         if let Some(fin) = &self.fin {
-            let (vertices, triangles) = self.fin_geometry(camera.eye, light, wind);
+            let (vertices, triangles) = self.fin_geometry(camera.eye, light, wind, shade);
             let fin_sampler = Sampler {
                 address_u: AddressMode::Wrap,
                 address_v: AddressMode::Clamp,
@@ -463,6 +466,29 @@ impl PreparedScene {
         })
     }
 
+    /// The mesh's triangles minus those whose fur is surely burnt away on `layer`; `None` when
+    /// nothing burns (draw them all).
+    fn unburnt_triangles(
+        &self,
+        shade: &ShadeParams,
+        layer: u32,
+        max_shell: u32,
+    ) -> Option<Vec<[u32; 3]>> {
+        let burn = shade.burn.as_ref()?;
+        let normal = |i: u32| self.mesh.vertices.get(i as usize).map(|v| v.normal);
+        Some(
+            self.mesh
+                .indices
+                .iter()
+                .filter(|t| match (normal(t[0]), normal(t[1]), normal(t[2])) {
+                    (Some(a), Some(b), Some(c)) => !burn.surely_burnt([a, b, c], layer, max_shell),
+                    _ => true,
+                })
+                .copied()
+                .collect(),
+        )
+    }
+
     /// Fin quads for this eye: one per silhouette edge, from the skin up to the fin height along
     /// the vertex normals, the top edge moved by the wind like the top shell. Their frame: x along the edge (texture u), z up the averaged normal
     /// (texture v), y = z × x.
@@ -471,7 +497,9 @@ impl PreparedScene {
         eye: Vec3,
         light: Vec3,
         wind: Option<(Vec3, f32)>,
+        shade: &ShadeParams,
     ) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
+        let top = self.scene.fur.number_of_shells - 1;
         // The wind bends a fin's top edge as it bends the top shell.
         let bend = |normal: Vec3| match wind {
             Some((direction, force)) => {
@@ -504,6 +532,14 @@ impl PreparedScene {
             let up = (a.normal + b.normal).normalize_or_zero();
             let z = (up - x * up.dot(x)).normalize_or_zero();
             if length == 0.0 || z == Vec3::ZERO {
+                continue;
+            }
+            // A fin burns like the top shell; one surely burnt away is left out.
+            if shade
+                .burn
+                .as_ref()
+                .is_some_and(|burn| burn.surely_burnt([a.normal, b.normal, a.normal], top, top))
+            {
                 continue;
             }
             let frame = mesh::frame::TangentFrame {
