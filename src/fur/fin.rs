@@ -134,21 +134,7 @@ mod tests {
     use super::*;
 
     fn vertical(x: f32, y: f32, h: f32, r: f32, colour: Vec3) -> Strand {
-        let root = Vec3::new(x, y, 0.0);
-        let tip = root + Vec3::Z * h;
-        Strand {
-            root,
-            control: [
-                root,
-                root.lerp(tip, 1.0 / 3.0),
-                root.lerp(tip, 2.0 / 3.0),
-                tip,
-            ],
-            base_radius: r,
-            tip_radius: r,
-            colour,
-            lean: Vec2::X,
-        }
+        super::super::strand::vertical_strand(x, y, h, r, colour)
     }
 
     #[test]

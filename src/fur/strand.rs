@@ -183,6 +183,27 @@ pub fn generate_fin_strands(params: &FurParams, seed: u32) -> Result<Vec<Strand>
     ))
 }
 
+/// A straight vertical strand of constant radius `r` rooted at (x, y), `h` tall: the simplest
+/// strand whose bake can be predicted by hand (test helper).
+#[cfg(test)]
+pub(crate) fn vertical_strand(x: f32, y: f32, h: f32, r: f32, colour: Vec3) -> Strand {
+    let root = Vec3::new(x, y, 0.0);
+    let tip = root + Vec3::Z * h;
+    Strand {
+        root,
+        control: [
+            root,
+            root.lerp(tip, 1.0 / 3.0),
+            root.lerp(tip, 2.0 / 3.0),
+            tip,
+        ],
+        base_radius: r,
+        tip_radius: r,
+        colour,
+        lean: glam::Vec2::X,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
