@@ -38,6 +38,29 @@ impl MipLevel {
     }
 }
 
+/// Where a bilinear sample reads (texel indices 00, 10, 01, 11 of one level) and its weights.
+struct BilinearFootprint {
+    texels: [usize; 4],
+    fx: f32,
+    fy: f32,
+}
+
+impl BilinearFootprint {
+    /// `top = t00 + (t10 − t00)·fx`, `bottom = t01 + (t11 − t01)·fx`,
+    /// `top + (bottom − top)·fy`.
+    #[inline]
+    fn filter(&self, level: &MipLevel) -> Vec4 {
+        let [i00, i10, i01, i11] = self.texels;
+        let t00 = to_vec4(level.texels[i00]);
+        let t10 = to_vec4(level.texels[i10]);
+        let t01 = to_vec4(level.texels[i01]);
+        let t11 = to_vec4(level.texels[i11]);
+        let top = t00 + (t10 - t00) * self.fx;
+        let bottom = t01 + (t11 - t01) * self.fx;
+        top + (bottom - top) * self.fy
+    }
+}
+
 /// An RGBA8 texture with its full mip chain.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Texture {
@@ -48,6 +71,20 @@ pub struct Texture {
 pub const MAX_TEXTURE_SIZE: u32 = 16384;
 
 impl Texture {
+    /// The mip level below `lod` and the fraction towards the next, `lod` clamped to the chain
+    /// (NaN → 0). `lod ≥ 0` after the clamp, so truncation is the floor.
+    #[inline]
+    fn level_and_fraction(&self, lod: f32) -> (usize, f32) {
+        let max = (self.levels.len() - 1) as f32;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, max)
+        };
+        let k = lod as usize;
+        (k, lod - k as f32)
+    }
+
     /// Builds a texture and its mip chain. Fails when the size is zero, too large, or does not
     /// match the number of texels.
     pub fn from_rgba8(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Result<Self, RasterError> {
@@ -184,6 +221,8 @@ fn address(i: i64, size: u32, mode: AddressMode) -> i64 {
     match mode {
         // Most coordinates are already inside: skip the division.
         AddressMode::Wrap if (0..size).contains(&i) => i,
+        // For a power of two the two's-complement mask is the Euclidean remainder.
+        AddressMode::Wrap if size & (size - 1) == 0 => i & (size - 1),
         AddressMode::Wrap => i.rem_euclid(size),
         AddressMode::Clamp => i.clamp(0, size - 1),
     }
@@ -246,21 +285,42 @@ impl Sampler {
     /// Trilinear sample at an explicit level of detail (clamped to the chain).
     #[inline]
     pub fn sample_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
-        let max = (texture.levels.len() - 1) as f32;
-        let lod = if lod.is_nan() {
-            0.0
-        } else {
-            lod.clamp(0.0, max)
-        };
-        let base = lod.floor();
-        let frac = lod - base;
-        let k = base as usize;
+        let (k, frac) = texture.level_and_fraction(lod);
         let a = self.bilinear(&texture.levels[k], uv);
         if frac == 0.0 || k + 1 >= texture.levels.len() {
             return a;
         }
         let b = self.bilinear(&texture.levels[k + 1], uv);
         a + (b - a) * frac
+    }
+
+    /// Two textures of the same size sampled at the same point and level of detail: the same
+    /// values as two [`Sampler::sample_level`] calls, with the addressing done once (a shader
+    /// reading a colour map and a tangent map at one coordinate).
+    #[inline]
+    pub fn sample_level_pair(
+        &self,
+        first: &Texture,
+        second: &Texture,
+        uv: Vec2,
+        lod: f32,
+    ) -> (Vec4, Vec4) {
+        if first.levels.len() != second.levels.len()
+            || first.width() != second.width()
+            || first.height() != second.height()
+        {
+            return (
+                self.sample_level(first, uv, lod),
+                self.sample_level(second, uv, lod),
+            );
+        }
+        let (k, frac) = first.level_and_fraction(lod);
+        let (a1, a2) = self.bilinear_pair(&first.levels[k], &second.levels[k], uv);
+        if frac == 0.0 || k + 1 >= first.levels.len() {
+            return (a1, a2);
+        }
+        let (b1, b2) = self.bilinear_pair(&first.levels[k + 1], &second.levels[k + 1], uv);
+        (a1 + (b1 - a1) * frac, a2 + (b2 - a2) * frac)
     }
 
     /// The nearest texel of mip level `round(lod)` (clamped to the chain, NaN → 0): one texel
@@ -289,21 +349,32 @@ impl Sampler {
 
     #[inline]
     fn bilinear(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
+        self.bilinear_footprint(level, uv).filter(level)
+    }
+
+    #[inline]
+    fn bilinear_pair(&self, first: &MipLevel, second: &MipLevel, uv: Vec2) -> (Vec4, Vec4) {
+        let footprint = self.bilinear_footprint(first, uv);
+        (footprint.filter(first), footprint.filter(second))
+    }
+
+    /// The four texels and the weights of a bilinear sample of a level of this size.
+    #[inline]
+    fn bilinear_footprint(&self, level: &MipLevel, uv: Vec2) -> BilinearFootprint {
         let x = texel_coordinate(uv.x * level.width as f32 - 0.5);
         let y = texel_coordinate(uv.y * level.height as f32 - 0.5);
         let (xi, yi) = (floor_small(x), floor_small(y));
         let (fx, fy) = (x - xi as f32, y - yi as f32);
-        let xa = address(xi, level.width, self.address_u);
-        let xb = address(xi.saturating_add(1), level.width, self.address_u);
-        let ya = address(yi, level.height, self.address_v);
-        let yb = address(yi.saturating_add(1), level.height, self.address_v);
-        let t00 = to_vec4(level.texel(xa, ya));
-        let t10 = to_vec4(level.texel(xb, ya));
-        let t01 = to_vec4(level.texel(xa, yb));
-        let t11 = to_vec4(level.texel(xb, yb));
-        let top = t00 + (t10 - t00) * fx;
-        let bottom = t01 + (t11 - t01) * fx;
-        top + (bottom - top) * fy
+        let xa = address(xi, level.width, self.address_u) as usize;
+        let xb = address(xi.saturating_add(1), level.width, self.address_u) as usize;
+        let ya = address(yi, level.height, self.address_v) as usize;
+        let yb = address(yi.saturating_add(1), level.height, self.address_v) as usize;
+        let w = level.width as usize;
+        BilinearFootprint {
+            texels: [ya * w + xa, ya * w + xb, yb * w + xa, yb * w + xb],
+            fx,
+            fy,
+        }
     }
 }
 
@@ -398,6 +469,40 @@ mod tests {
         ] {
             assert_eq!(floor_small(x), x.floor() as i64, "{x}");
         }
+    }
+
+    #[test]
+    fn wrapping_masks_powers_of_two_like_rem_euclid() {
+        for size in [1u32, 2, 4, 16, 128, 3, 12, 100] {
+            for i in (-1000i64..1000).chain([i64::MIN / 2, -(1 << 40), 1 << 40]) {
+                assert_eq!(
+                    address(i, size, AddressMode::Wrap),
+                    i.rem_euclid(i64::from(size)),
+                    "{i} mod {size}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn paired_samples_equal_single_samples() {
+        let a = checker(16);
+        let texels: Vec<[u8; 4]> = (0..256u32)
+            .map(|i| [(i * 7) as u8, (i * 13) as u8, (i * 29) as u8, (i * 3) as u8])
+            .collect();
+        let b = Texture::from_rgba8(16, 16, texels).expect("texture");
+        let s = Sampler::default();
+        for k in 0..500 {
+            let uv = Vec2::new(k as f32 * 0.0137 - 2.0, k as f32 * 0.0291 - 5.0);
+            let lod = k as f32 * 0.011 - 0.5;
+            let (pa, pb) = s.sample_level_pair(&a, &b, uv, lod);
+            assert_eq!(pa, s.sample_level(&a, uv, lod));
+            assert_eq!(pb, s.sample_level(&b, uv, lod));
+        }
+        let small = checker(4);
+        let (pa, pb) = s.sample_level_pair(&a, &small, Vec2::splat(0.3), 0.7);
+        assert_eq!(pa, s.sample_level(&a, Vec2::splat(0.3), 0.7));
+        assert_eq!(pb, s.sample_level(&small, Vec2::splat(0.3), 0.7));
     }
 
     #[test]

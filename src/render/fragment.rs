@@ -86,6 +86,8 @@ pub enum Spot {
         inner_threshold: f32,
         /// Intensity where the ring ends.
         outer_threshold: f32,
+        /// Cosines below this give weight 0 for certain (the lobe is not taken there).
+        outside_below: f32,
         /// Colour.
         colour: Vec3,
     },
@@ -123,9 +125,14 @@ impl Spot {
                 exponent,
                 inner_threshold,
                 outer_threshold,
+                outside_below,
                 colour,
             } => {
-                let lobe = shading::light_spot_intensity(normal, direction, exponent);
+                let cosine = shading::light_spot_cosine(normal, direction);
+                if cosine < outside_below {
+                    return (colour, 0.0);
+                }
+                let lobe = shading::light_spot_lobe(cosine, exponent);
                 (
                     colour,
                     shading::spot_gradient(lobe, inner_threshold, outer_threshold),
@@ -152,6 +159,8 @@ pub struct BurnState {
     pub matches: Vec<Vec3>,
     /// The lobe exponent at this instant.
     pub exponent: f32,
+    /// Cosines below this give intensities under the burn threshold for certain.
+    pub unburnt_below: f32,
 }
 
 impl BurnState {
@@ -178,12 +187,20 @@ impl BurnState {
         })
     }
 
-    /// The spot intensity `I` of thesis 3.4: the strongest match lobe at this normal.
+    /// The spot intensity `I` of thesis 3.4: the strongest match lobe at this normal. Lobes
+    /// surely under the burn threshold count as 0: the burn rule treats both alike.
     #[inline]
     pub fn intensity(&self, normal: Vec3) -> f32 {
         self.matches
             .iter()
-            .map(|&m| shading::light_spot_intensity(normal, m, self.exponent))
+            .map(|&m| {
+                let cosine = shading::light_spot_cosine(normal, m);
+                if cosine < self.unburnt_below {
+                    0.0
+                } else {
+                    shading::light_spot_lobe(cosine, self.exponent)
+                }
+            })
             .fold(0.0, f32::max)
     }
 }
@@ -195,12 +212,8 @@ pub struct ShadeParams {
     pub light_colour: Vec3,
     /// Ambient level.
     pub ambient: f32,
-    /// Banks exponent on the diffuse.
-    pub banks_exponent: f32,
-    /// Specular exponent.
-    pub specular_exponent: f32,
-    /// Exponent of the dampened specular.
-    pub dampened_exponent: f32,
+    /// Exponents of the diffuse, specular and dampened specular terms.
+    pub exponents: shading::LightingExponents,
     /// One or three tangents.
     pub tangents: SpecularTangents,
     /// Scheuermann shift.
@@ -249,6 +262,10 @@ impl ShadeParams {
                     exponent: spot.exponent,
                     inner_threshold: spot.inner_threshold,
                     outer_threshold: spot.outer_threshold,
+                    outside_below: shading::light_spot_cosine_below(
+                        spot.inner_threshold.min(spot.outer_threshold),
+                        spot.exponent,
+                    ),
                     colour: spot.colour,
                 },
             })
@@ -270,14 +287,17 @@ impl ShadeParams {
             shading::burn_exponent(time, &schedule).map(|exponent| BurnState {
                 matches: b.matches.iter().map(|m| m.normalize_or_zero()).collect(),
                 exponent,
+                unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
             })
         });
         ShadeParams {
             light_colour: s.light.colour,
             ambient: s.shading.ambient,
-            banks_exponent: s.shading.banks_exponent,
-            specular_exponent: s.shading.specular_exponent,
-            dampened_exponent: s.shading.dampened_exponent,
+            exponents: shading::LightingExponents {
+                banks: s.shading.banks_exponent,
+                specular: s.shading.specular_exponent,
+                dampened: s.shading.dampened_exponent,
+            },
             tangents: if s.shading.specular_tangents == 3 {
                 SpecularTangents::Three
             } else {
@@ -326,13 +346,12 @@ pub fn shade_fur(
     let uv = v.uv - v.wind_uv;
     let (ddx, ddy) = f.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, colour_map.width(), colour_map.height());
-    let texel = sampler.sample_level(colour_map, uv, lod);
+    let (texel, encoded) = sampler.sample_level_pair(colour_map, tangent_map, uv, lod);
     let alpha = texel.w * v.fade;
     // NaN alpha is discarded too.
     if alpha.is_nan() || alpha < ALPHA_DISCARD {
         return None;
     }
-    let encoded = sampler.sample_level(tangent_map, uv, lod);
     if p.debug_view == DebugView::Tangents {
         return Some(encoded.truncate().extend(alpha));
     }
@@ -369,28 +388,22 @@ pub fn shade_fur(
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
         return Some(Vec4::new(g, g, g, alpha));
     }
-    let diffuse = shading::kajiya_kay_diffuse(tangent, light, p.banks_exponent);
-    let specular = shading::specular_with_tangents(
+    let lighting = shading::strand_lighting(
         tangent,
         Vec3::Z,
         light,
         eye,
-        p.specular_exponent,
+        p.exponents,
         p.tangents,
         p.tangent_shift,
     );
-    let dampened = shading::dampened_specular(shading::kajiya_kay_specular(
-        tangent,
-        light,
-        eye,
-        p.dampened_exponent,
-    ));
+    let dampened = shading::dampened_specular(lighting.specular_to_dampen);
     let colour = shading::final_colour(
         strand,
         p.light_colour,
         p.ambient,
-        diffuse,
-        specular,
+        lighting.diffuse,
+        lighting.specular,
         dampened,
         shadow,
         &p.weights,

@@ -2,7 +2,7 @@
 //! between tangent and light, raised to Banks's exponent; specular from the reflection cone,
 //! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
-use super::numeric::{finite_or_zero, pow01};
+use super::numeric::{finite_or_zero, pow01, pow01_x4};
 use super::tangent_space::cos_sin_unit;
 use glam::Vec3;
 
@@ -42,9 +42,92 @@ pub fn kajiya_kay_specular(tangent: Vec3, light: Vec3, eye: Vec3, exponent: f32)
 /// Eq. 2.7 on vectors already unit (or zero).
 #[inline]
 fn specular_unit(t: Vec3, l: Vec3, e: Vec3, exponent: f32) -> f32 {
+    pow01(specular_base_unit(t, l, e), exponent)
+}
+
+/// The base of eq. 2.7 before the power, `(t·l)(t·e) + sin(t, l)·sin(t, e)`, on unit vectors.
+#[inline]
+fn specular_base_unit(t: Vec3, l: Vec3, e: Vec3) -> f32 {
     let (cl, sl) = cos_sin_unit(t, l);
     let (ce, se) = cos_sin_unit(t, e);
-    pow01(cl * ce + sl * se, exponent)
+    cl * ce + sl * se
+}
+
+/// The exponents of the three strand lighting terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightingExponents {
+    /// Banks's exponent on the diffuse (eq. 2.5, 3.2.3).
+    pub banks: f32,
+    /// The specular exponent (eq. 2.7).
+    pub specular: f32,
+    /// The exponent of the specular that is then dampened (3.2.3).
+    pub dampened: f32,
+}
+
+/// The three strand lighting terms of one fragment, before eq. 3.7.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrandLighting {
+    /// [`kajiya_kay_diffuse`] with Banks's exponent.
+    pub diffuse: f32,
+    /// [`specular_with_tangents`] with the specular exponent.
+    pub specular: f32,
+    /// [`kajiya_kay_specular`] with the dampened exponent, before
+    /// [`dampened_specular`](super::dampened_specular).
+    pub specular_to_dampen: f32,
+}
+
+/// Eq. 2.5 and 2.7 together, as the fur shader needs them: bit-identical to
+/// `kajiya_kay_diffuse(t, l, banks)`, `specular_with_tangents(t, n, l, e, specular, tangents,
+/// shift)` and `kajiya_kay_specular(t, l, e, dampened)`, but the tangent, light and eye are
+/// normalised once and the powers are taken four at a time (they are most of a fragment's cost).
+#[inline]
+pub fn strand_lighting(
+    tangent: Vec3,
+    normal: Vec3,
+    light: Vec3,
+    eye: Vec3,
+    exponents: LightingExponents,
+    tangents: SpecularTangents,
+    shift: f32,
+) -> StrandLighting {
+    let t = tangent.normalize_or_zero();
+    let l = light.normalize_or_zero();
+    let e = eye.normalize_or_zero();
+    let diffuse_base = cos_sin_unit(t, l).1;
+    let centre = specular_base_unit(t, l, e);
+    match tangents {
+        SpecularTangents::One => {
+            let [diffuse, specular, specular_to_dampen, _] = pow01_x4(
+                [diffuse_base, centre, centre, 0.0],
+                [exponents.banks, exponents.specular, exponents.dampened, 1.0],
+            );
+            StrandLighting {
+                diffuse,
+                specular,
+                specular_to_dampen,
+            }
+        }
+        SpecularTangents::Three => {
+            let n = normal.normalize_or_zero();
+            let up = specular_base_unit(shift_tangent(t, n, shift), l, e);
+            let down = specular_base_unit(shift_tangent(t, n, -shift), l, e);
+            let [diffuse, centre_specular, specular_to_dampen, up_specular] = pow01_x4(
+                [diffuse_base, centre, centre, up],
+                [
+                    exponents.banks,
+                    exponents.specular,
+                    exponents.dampened,
+                    exponents.specular,
+                ],
+            );
+            let down_specular = pow01(down, exponents.specular);
+            StrandLighting {
+                diffuse,
+                specular: (centre_specular + up_specular + down_specular) / 3.0,
+                specular_to_dampen,
+            }
+        }
+    }
 }
 
 /// How many tangents the specular term of eq. 3.5 uses (thesis table 4.4: 1 or 3).
@@ -216,6 +299,56 @@ mod tests {
             }
             let three = specular_with_tangents(t, n, l, e, p, SpecularTangents::Three, shift);
             assert_close(three, mean, tol, "three-tangent specular");
+        }
+    }
+
+    #[test]
+    fn strand_lighting_is_bit_identical_to_the_separate_terms() {
+        let mut rng = Lcg::new(14);
+        let special = [
+            Vec3::ZERO,
+            Vec3::splat(f32::NAN),
+            Vec3::X,
+            -Vec3::X,
+            Vec3::new(1.0, 1e-8, 0.0),
+        ];
+        for k in 0..4000 {
+            let pick = |rng: &mut Lcg, i: usize| {
+                if k % 17 == i {
+                    special[k % special.len()]
+                } else {
+                    rng.cube()
+                }
+            };
+            let (t, l, e) = (pick(&mut rng, 0), pick(&mut rng, 1), pick(&mut rng, 2));
+            let n = rng.direction();
+            let exponents = LightingExponents {
+                banks: [BANKS_EXPONENT, 1.0, 2.0, 0.5][k % 4],
+                specular: rng.range(1.0, 120.0),
+                dampened: [rng.range(1.0, 40.0), f32::NAN, 0.0][k % 3],
+            };
+            let shift = rng.range(-0.5, 0.5);
+            for tangents in [SpecularTangents::One, SpecularTangents::Three] {
+                let got = strand_lighting(t, n, l, e, exponents, tangents, shift);
+                let want = StrandLighting {
+                    diffuse: kajiya_kay_diffuse(t, l, exponents.banks),
+                    specular: specular_with_tangents(
+                        t,
+                        n,
+                        l,
+                        e,
+                        exponents.specular,
+                        tangents,
+                        shift,
+                    ),
+                    specular_to_dampen: kajiya_kay_specular(t, l, e, exponents.dampened),
+                };
+                assert_eq!(
+                    [got.diffuse, got.specular, got.specular_to_dampen].map(f32::to_bits),
+                    [want.diffuse, want.specular, want.specular_to_dampen].map(f32::to_bits),
+                    "{t} {l} {e} {exponents:?} {tangents:?}: {got:?} vs {want:?}"
+                );
+            }
         }
     }
 

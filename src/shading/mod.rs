@@ -78,8 +78,8 @@ pub mod wind;
 
 pub use burn::{BURN_THRESHOLD, BurnOutcome, BurnSchedule, burn_exponent, burn_rule};
 pub use kajiya_kay::{
-    BANKS_EXPONENT, SpecularTangents, kajiya_kay_diffuse, kajiya_kay_specular, shift_tangent,
-    specular_with_tangents,
+    BANKS_EXPONENT, LightingExponents, SpecularTangents, StrandLighting, kajiya_kay_diffuse,
+    kajiya_kay_specular, shift_tangent, specular_with_tangents, strand_lighting,
 };
 pub use lighting::{
     DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
@@ -88,8 +88,8 @@ pub use lighting::{
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
 pub use shadow::{SHADOW_MIN_COS, shadow_change, shadow_lookup_count, shell_shadow};
 pub use spots::{
-    apply_spot, apply_spots, ellipsoid_spot_intensity, light_spot_intensity, spot_gradient,
-    stripe_intensity,
+    apply_spot, apply_spots, ellipsoid_spot_intensity, light_spot_cosine, light_spot_cosine_below,
+    light_spot_intensity, light_spot_lobe, spot_gradient, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

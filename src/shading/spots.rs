@@ -34,12 +34,43 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
 /// negative as 0. Map the lobe to a colour weight with [`spot_gradient`].
 #[inline]
 pub fn light_spot_intensity(normal: Vec3, spot_light_dir: Vec3, exponent: f32) -> f32 {
-    pow01(
-        normal
-            .normalize_or_zero()
-            .dot(spot_light_dir.normalize_or_zero()),
-        exponent,
-    )
+    light_spot_lobe(light_spot_cosine(normal, spot_light_dir), exponent)
+}
+
+/// The cosine `n̂·l̂` inside [`light_spot_intensity`], both vectors normalised (zero or NaN
+/// vectors give 0 or NaN, which the lobe maps to `0^p`).
+#[inline]
+pub fn light_spot_cosine(normal: Vec3, spot_light_dir: Vec3) -> f32 {
+    normal
+        .normalize_or_zero()
+        .dot(spot_light_dir.normalize_or_zero())
+}
+
+/// The lobe of [`light_spot_intensity`] from its cosine: `max(0, cosine)^exponent`.
+#[inline]
+pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
+    pow01(cosine, exponent)
+}
+
+/// A cosine below which the lobe is surely below `level`: for every f32 `c < bound`,
+/// `light_spot_lobe(c, exponent) < level`. It lets a shader skip the power where the lobe cannot
+/// matter (outside a spot's ring, under the burn threshold) without changing a single bit.
+///
+/// Derivation: `bound = (level·(1 − 10⁻³))^(1/exponent)` in f64, rounded down to f32, so the
+/// exact lobe of any smaller cosine is at least 10⁻³ (relative) under `level`, far more than the
+/// error of `powf` (under 1 ulp). With nothing safe to promise (`level ≤ 0`, NaN, an exponent
+/// that is not positive) the bound is −∞: no cosine is skipped.
+pub fn light_spot_cosine_below(level: f32, exponent: f32) -> f32 {
+    if !(level > 0.0 && exponent > 0.0) {
+        return f32::NEG_INFINITY;
+    }
+    let exact = (f64::from(level.min(1.0)) * (1.0 - 1.0e-3)).powf(1.0 / f64::from(exponent));
+    let bound = exact as f32;
+    if f64::from(bound) > exact {
+        bound.next_down()
+    } else {
+        bound
+    }
 }
 
 /// Inner circle / ring / outside of a light-based spot (thesis 3.2.4: "in the inner circle the
@@ -259,5 +290,47 @@ mod tests {
         }
         assert_eq!(stripe_intensity(f32::NAN, 1.0, 0.2, 0.1), 0.0);
         assert_eq!(stripe_intensity(0.0, 1.0, f32::NAN, f32::NAN), 1.0);
+    }
+
+    #[test]
+    fn lobes_below_the_cosine_bound_are_below_the_level() {
+        let mut rng = Lcg::new(31);
+        for _ in 0..300 {
+            let level = rng.range(1.0e-3, 1.0);
+            let exponent = if rng.unit() < 0.5 {
+                rng.range(0.05, 2.0)
+            } else {
+                rng.range(2.0, 400.0)
+            };
+            let bound = light_spot_cosine_below(level, exponent);
+            assert!(bound.is_finite(), "{level} {exponent}");
+            // The bound is tight: the exact lobe at the bound is within 1 % of the level.
+            let at_bound = f64::from(bound).max(0.0).powf(f64::from(exponent));
+            assert!(at_bound <= f64::from(level) && at_bound >= 0.99 * f64::from(level) - 1e-30);
+            let mut c = bound.next_down();
+            for _ in 0..64 {
+                assert!(
+                    light_spot_lobe(c, exponent) < level,
+                    "{c}^{exponent} vs {level}"
+                );
+                c = c.next_down();
+            }
+            for c in [0.0, -1.0, bound * 0.5, bound - 1e-3] {
+                if c < bound {
+                    assert!(light_spot_lobe(c, exponent) < level);
+                }
+            }
+        }
+        assert_eq!(light_spot_cosine_below(0.0, 4.0), f32::NEG_INFINITY);
+        assert_eq!(light_spot_cosine_below(0.5, 0.0), f32::NEG_INFINITY);
+        assert_eq!(light_spot_cosine_below(f32::NAN, 4.0), f32::NEG_INFINITY);
+        assert_eq!(light_spot_cosine_below(0.5, f32::NAN), f32::NEG_INFINITY);
+        assert_eq!(light_spot_cosine_below(0.5, f32::INFINITY), 1.0);
+        let n = Vec3::new(0.3, -0.2, 0.9);
+        let d = Vec3::new(1.0, 2.0, 3.0);
+        assert_eq!(
+            light_spot_intensity(n, d, 7.0),
+            light_spot_lobe(light_spot_cosine(n, d), 7.0)
+        );
     }
 }
