@@ -18,3 +18,5 @@ pub mod raster;
 pub mod render;
 pub mod scene;
 pub mod shading;
+pub mod sweep;
+pub mod text;

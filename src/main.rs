@@ -1,4 +1,4 @@
-//! The `pelage` command line: render scenes to PNG and benchmark them.
+//! The `pelage` command line: render scenes to PNG, benchmark them, sweep their parameters.
 //!
 //! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments), 1 on other failures
 //! (an output that cannot be written).
@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
 use cli::render::RenderArgs;
+use cli::sweep::{MergeArgs, SweepArgs};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -29,6 +30,10 @@ enum Command {
     Render(RenderArgs),
     /// Time baking and frames of a scene.
     Bench(BenchArgs),
+    /// Run a parameter sweep (thesis tables 4.1–4.6): results.csv, contact sheet, fps plot.
+    Sweep(SweepArgs),
+    /// Merge the folders of sweep shards (--shard I/N) into one sweep folder.
+    SweepMerge(MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +55,8 @@ fn main() -> ExitCode {
     let result = match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Sweep(args) => cli::sweep::run(args),
+        Command::SweepMerge(args) => cli::sweep::merge(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

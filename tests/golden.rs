@@ -78,10 +78,7 @@ impl Variant {
         match self {
             Variant::AsWritten => {}
             Variant::Time(t) => scene.time = t,
-            Variant::Distance(d) => {
-                let c = &mut scene.camera;
-                c.eye = c.target + (c.eye - c.target).normalize() * d;
-            }
+            Variant::Distance(d) => scene.camera = scene.camera.at_distance(d),
         }
     }
 

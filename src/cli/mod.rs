@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 pub mod bench;
 pub mod render;
+pub mod sweep;
 
 /// The arguments every scene-reading subcommand takes.
 #[derive(Args, Clone)]
@@ -82,6 +83,32 @@ pub fn load_scene(args: &CommonArgs) -> Result<Scene, Failure> {
             pelage::scene::DEFAULT_SCENE_NAME.to_string(),
         ),
     };
+    apply_overrides(&mut scene, args, &name)?;
+    Ok(scene)
+}
+
+/// The scene's text, its name for messages, and the folder its relative paths start from.
+pub fn scene_source(args: &CommonArgs) -> Result<(String, String, PathBuf), Failure> {
+    match &args.scene {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                Failure::bad_input(format!("{}: cannot read the scene: {e}", path.display()))
+            })?;
+            let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+            Ok((text, path.display().to_string(), dir))
+        }
+        None => Ok((
+            pelage::scene::DEFAULT_SCENE.to_string(),
+            pelage::scene::DEFAULT_SCENE_NAME.to_string(),
+            PathBuf::from("scenes"),
+        )),
+    }
+}
+
+/// `--width`, `--height` and `--time` written into the scene, which is then checked again;
+/// `--tile` is checked too.
+pub fn apply_overrides(scene: &mut Scene, args: &CommonArgs, name: &str) -> Result<(), Failure> {
+    let bad = Failure::bad_input;
     if let Some(w) = args.width {
         scene.image.width = w;
     }
@@ -92,10 +119,10 @@ pub fn load_scene(args: &CommonArgs) -> Result<Scene, Failure> {
         scene.time = t;
     }
     scene
-        .revalidate(&name)
+        .revalidate(name)
         .map_err(|e| bad(format!("{e} (after --width/--height/--time)")))?;
     pelage::raster::TileGrid::new(1, 1, args.tile).map_err(|e| bad(format!("--tile: {e}")))?;
-    Ok(scene)
+    Ok(())
 }
 
 /// Runs `work` on a pool of `threads` workers (all cores when `None`).

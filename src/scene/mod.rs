@@ -135,6 +135,24 @@ impl Default for CameraSettings {
     }
 }
 
+impl CameraSettings {
+    /// The camera moved along its line of sight to `distance` from its target (thesis table
+    /// 4.5, figure 4.1). At distance 0 the eye sits on the target and the target moves one unit
+    /// on along the same line, so the view direction is kept. A camera whose eye is already on
+    /// its target has no line of sight and is returned unchanged.
+    pub fn at_distance(&self, distance: f32) -> CameraSettings {
+        let Some(direction) = (self.eye - self.target).try_normalize() else {
+            return self.clone();
+        };
+        let mut moved = self.clone();
+        moved.eye = self.target + (self.eye - self.target).normalize() * distance;
+        if distance == 0.0 {
+            moved.target = self.target - direction;
+        }
+        moved
+    }
+}
+
 /// Which object carries the fur.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]

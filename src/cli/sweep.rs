@@ -1,0 +1,212 @@
+//! `pelage sweep`: the thesis's chapter 4 experiments. Every point of the parameter product is
+//! baked, rendered `--frames` times and timed; the folder gets `point_NNNN.png` per point,
+//! `results.csv`, `contact_sheet.png` and `fps.png`. `pelage sweep-merge` joins shards.
+
+use super::{CommonArgs, Failure, apply_overrides, progress, scene_source, with_threads};
+use clap::Args;
+use pelage::render::PreparedScene;
+use pelage::sweep::{self, ResultRow, Shard, SweepParameter};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// NAME=V1,V2,...: a thesis parameter (model_resolution, number_of_shells,
+    /// texture_resolution, number_of_strands, strand_resolution, circle_resolution,
+    /// specular_tangents, shadow_divisor, number_of_spots, camera_distance, time/burn_time) or any
+    /// dotted scene key (fur.model_difference, light.direction, ...). Repeat for a product.
+    #[arg(long = "param", required = true)]
+    pub params: Vec<String>,
+    /// Output folder.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Frames timed per point (the median is reported).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub frames: u32,
+    /// Run only shard I of N (1-based): the points whose number is I − 1 modulo N.
+    #[arg(long)]
+    pub shard: Option<String>,
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// Output folder for the merged results.csv, contact sheet and plot.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The shards' output folders (each with its results.csv and point PNGs).
+    #[arg(required = true)]
+    pub shards: Vec<PathBuf>,
+}
+
+pub fn run(args: SweepArgs) -> Result<(), Failure> {
+    let bad = |e: sweep::SweepError| Failure::bad_input(e.0);
+    let parameters: Vec<SweepParameter> = args
+        .params
+        .iter()
+        .map(|p| SweepParameter::parse(p))
+        .collect::<Result<_, _>>()
+        .map_err(bad)?;
+    let shard = args
+        .shard
+        .as_deref()
+        .map(Shard::parse)
+        .transpose()
+        .map_err(bad)?;
+    let points = sweep::sweep_points(&parameters).map_err(bad)?;
+    let (text, name, base_dir) = scene_source(&args.common)?;
+    // Every point is checked before any is rendered, so a bad value fails at once.
+    let mut scenes = Vec::new();
+    for point in points
+        .iter()
+        .filter(|p| shard.is_none_or(|s| s.runs(p.index)))
+    {
+        let mut scene = sweep::scene_at(&text, &name, &base_dir, point).map_err(bad)?;
+        apply_overrides(&mut scene, &args.common, &name)?;
+        scenes.push((point.clone(), scene));
+    }
+    create_folder(&args.output)?;
+    let tile = args.common.tile;
+    let frames = args.frames;
+    let output = args.output.clone();
+    let rows = with_threads(
+        args.common.threads,
+        || -> Result<Vec<ResultRow>, Failure> {
+            let bar = progress(scenes.len() as u64);
+            let mut rows = Vec::new();
+            for (point, scene) in &scenes {
+                bar.set_message(point.label());
+                let start = Instant::now();
+                let prepared = PreparedScene::new(scene)?;
+                let bake_ms = start.elapsed().as_secs_f64() * 1e3;
+                let mut times = Vec::new();
+                let mut last = None;
+                for _ in 0..frames {
+                    let t = Instant::now();
+                    let image = prepared.render(tile)?;
+                    times.push(t.elapsed().as_secs_f64() * 1e3);
+                    last = Some(image);
+                }
+                let Some(image) = last else {
+                    return Err(Failure::other("no frame was rendered"));
+                };
+                super::write_png(
+                    &output.join(point_file(point.index)),
+                    image.width,
+                    image.height,
+                    &image.rgba8,
+                )?;
+                times.sort_by(f64::total_cmp);
+                let median = times[times.len() / 2];
+                rows.push(ResultRow {
+                    point: point.index,
+                    values: point.values.iter().map(|(_, v)| v.clone()).collect(),
+                    bake_ms,
+                    median_frame_ms: median,
+                    min_frame_ms: times[0],
+                    max_frame_ms: times[times.len() - 1],
+                    fps: 1e3 / median,
+                    fragments_shaded: image.stats.fragments_shaded,
+                    extra: Vec::new(),
+                });
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+            Ok(rows)
+        },
+    )??;
+    let names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
+    write_summary(&args.output, &names, &rows)
+}
+
+pub fn merge(args: MergeArgs) -> Result<(), Failure> {
+    let mut files = Vec::new();
+    for dir in &args.shards {
+        let path = dir.join("results.csv");
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            Failure::bad_input(format!(
+                "{}: cannot read the shard's results: {e}",
+                path.display()
+            ))
+        })?;
+        files.push((path.display().to_string(), text));
+    }
+    let (names, rows) = sweep::merge_results(&files).map_err(|e| Failure::bad_input(e.0))?;
+    create_folder(&args.output)?;
+    // The point renders come along, so the merged folder is a whole sweep.
+    for row in &rows {
+        let file = point_file(row.point);
+        let target = args.output.join(&file);
+        if let Some(source) = args
+            .shards
+            .iter()
+            .map(|d| d.join(&file))
+            .find(|p| p.is_file())
+            && !same_file(&source, &target)
+        {
+            let bytes = std::fs::read(&source)
+                .map_err(|e| Failure::other(format!("{}: cannot read: {e}", source.display())))?;
+            pelage::output::write_atomic(&target, &bytes)
+                .map_err(|e| Failure::other(e.to_string()))?;
+        }
+    }
+    write_summary(&args.output, &names, &rows)
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+fn point_file(index: usize) -> String {
+    format!("point_{index:04}.png")
+}
+
+fn create_folder(dir: &Path) -> Result<(), Failure> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Failure::other(format!(
+            "{}: cannot create the output folder: {e}",
+            dir.display()
+        ))
+    })
+}
+
+/// results.csv, the contact sheet (from the point PNGs in `dir`) and the fps plot.
+fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(), Failure> {
+    let csv = sweep::write_results(names, rows).map_err(|e| Failure::other(e.0))?;
+    pelage::output::write_atomic(&dir.join("results.csv"), csv.as_bytes())
+        .map_err(|e| Failure::other(e.to_string()))?;
+    let mut cells = Vec::new();
+    for row in rows {
+        let path = dir.join(point_file(row.point));
+        let Ok(image) = image::open(&path) else {
+            eprintln!(
+                "warning: {}: missing or unreadable, left off the contact sheet",
+                path.display()
+            );
+            continue;
+        };
+        let mut label: Vec<String> = names
+            .iter()
+            .zip(&row.values)
+            .map(|(n, v)| format!("{n}={v}"))
+            .collect();
+        label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
+        cells.push((image.to_rgba8(), label));
+    }
+    if let Some(sheet) = sweep::contact_sheet(&cells) {
+        super::write_png(
+            &dir.join("contact_sheet.png"),
+            sheet.width(),
+            sheet.height(),
+            &sheet,
+        )?;
+    }
+    if let Some(plot) = sweep::fps_plot(names, rows) {
+        super::write_png(&dir.join("fps.png"), plot.width(), plot.height(), &plot)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,202 @@
+//! `pelage sweep` and `pelage sweep-merge` as a user runs them: the folder's files, the CSV's
+//! points, shards that merge into the whole sweep, and bad parameters refused with exit 2.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn pelage(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(args)
+        .output()
+        .expect("pelage runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sweep-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+/// A small, quick sweep: 2 × 2 points of the embedded torus at 96×72.
+fn sweep_args(out: &str) -> Vec<String> {
+    [
+        "sweep",
+        "--param",
+        "number_of_shells=4,8",
+        "--param",
+        "shading.specular_tangents=1,3",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "--frames",
+        "1",
+        "-o",
+        out,
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect()
+}
+
+fn run(args: &[String]) -> Output {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = pelage(&args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// The rows of results.csv without the timings: point and parameter values.
+fn points_and_values(csv: &str) -> Vec<String> {
+    csv.lines()
+        .map(|l| l.split(',').take(3).collect::<Vec<_>>().join(","))
+        .collect()
+}
+
+#[test]
+fn a_sweep_writes_csv_renders_sheet_and_plot() {
+    let dir = scratch("whole");
+    let out = dir.join("all");
+    run(&sweep_args(out.to_str().unwrap()));
+    let csv = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+    assert_eq!(
+        points_and_values(&csv),
+        [
+            "point,number_of_shells,shading.specular_tangents",
+            "0,4,1",
+            "1,4,3",
+            "2,8,1",
+            "3,8,3"
+        ]
+    );
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains("bake_ms,median_frame_ms")
+    );
+    for file in [
+        "contact_sheet.png",
+        "fps.png",
+        "point_0000.png",
+        "point_0003.png",
+    ] {
+        let image = image::open(out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert!(image.width() > 0);
+    }
+    // A point's render is the render of the scene with that value.
+    let single = dir.join("single.png");
+    run(&[
+        "render",
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "-o",
+        single.to_str().unwrap(),
+    ]
+    .map(String::from));
+    let with_value = dir.join("with-value.png");
+    let scene = dir.join("eight.toml");
+    let text =
+        pelage::scene::DEFAULT_SCENE.replace("number_of_shells = 30", "number_of_shells = 8");
+    assert_ne!(
+        text,
+        pelage::scene::DEFAULT_SCENE,
+        "the default scene sets number_of_shells"
+    );
+    std::fs::write(&scene, text).expect("scene");
+    // Relative paths in the default scene (none today) would resolve from its folder.
+    run(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "96",
+        "--height",
+        "72",
+        "-o",
+        with_value.to_str().unwrap(),
+    ]
+    .map(String::from));
+    assert_eq!(
+        std::fs::read(out.join("point_0002.png")).unwrap(),
+        std::fs::read(&with_value).unwrap(),
+        "point 2 (number_of_shells=8, one tangent) equals a render with that value"
+    );
+}
+
+#[test]
+fn shards_merge_into_the_whole_sweep() {
+    let dir = scratch("shards");
+    let mut shard_dirs = Vec::new();
+    for i in 1..=3 {
+        let out = dir.join(format!("shard{i}"));
+        let mut args = sweep_args(out.to_str().unwrap());
+        args.extend(["--shard".to_string(), format!("{i}/3")]);
+        run(&args);
+        shard_dirs.push(out);
+    }
+    let merged = dir.join("merged");
+    let mut args = vec![
+        "sweep-merge".to_string(),
+        "-o".into(),
+        merged.to_str().unwrap().into(),
+    ];
+    args.extend(shard_dirs.iter().map(|d| d.to_str().unwrap().to_string()));
+    run(&args);
+    let csv = std::fs::read_to_string(merged.join("results.csv")).expect("merged csv");
+    assert_eq!(
+        points_and_values(&csv)[1..],
+        ["0,4,1", "1,4,3", "2,8,1", "3,8,3"]
+    );
+    for k in 0..4 {
+        assert!(merged.join(format!("point_{k:04}.png")).is_file());
+    }
+    assert!(merged.join("contact_sheet.png").is_file());
+    // The same shard twice is refused: its points would count twice.
+    let twice = pelage(&[
+        "sweep-merge",
+        "-o",
+        dir.join("twice").to_str().unwrap(),
+        shard_dirs[0].to_str().unwrap(),
+        shard_dirs[0].to_str().unwrap(),
+    ]);
+    assert_eq!(twice.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&twice.stderr).contains("point 0"));
+}
+
+#[test]
+fn bad_parameters_are_refused_before_rendering() {
+    let dir = scratch("bad");
+    for (param, needle) in [
+        ("number_of_shells=10,0", "number_of_shells"),
+        ("fur.not_a_key=3", "not_a_key"),
+        ("number_of_spots=5", "number_of_spots"),
+        ("no_equals_sign", "NAME=V1"),
+        ("camera_distance=-3", "camera_distance"),
+    ] {
+        let out = dir.join("never");
+        let o = pelage(&["sweep", "--param", param, "-o", out.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{param}: {err}");
+        assert!(err.contains(needle), "{param}: {err}");
+        assert!(!err.contains("panicked"), "{param}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{param}: {err}");
+        assert!(!out.exists(), "{param}: nothing is written for a bad sweep");
+    }
+    let o = pelage(&[
+        "sweep",
+        "--param",
+        "number_of_shells=4",
+        "--shard",
+        "4/3",
+        "-o",
+        dir.join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}
