@@ -39,24 +39,43 @@ pub fn run(args: BenchArgs) -> Result<(), Failure> {
         times.sort_by(f64::total_cmp);
         let median = times[times.len() / 2];
         let (min, max) = (times[0], times[times.len() - 1]);
+        let mut deviations: Vec<f64> = times.iter().map(|t| (t - median).abs()).collect();
+        deviations.sort_by(f64::total_cmp);
+        let mad = deviations[deviations.len() / 2];
         let fps = 1e3 / median;
+        let peak = peak_memory_bytes();
+        let peak_mib = peak.map(|b| b as f64 / (1024.0 * 1024.0));
         let fragments_per_s = fragments as f64 / (median / 1e3);
         let threads = rayon::current_num_threads();
         Ok(if args.json {
             format!(
-                "{{\"bake_ms\":{bake_ms:.3},\"frames\":{},\"median_frame_ms\":{median:.3},\"min_frame_ms\":{min:.3},\"max_frame_ms\":{max:.3},\"fps\":{fps:.3},\"fragments_per_frame\":{fragments},\"fragments_per_s\":{fragments_per_s:.0},\"threads\":{threads},\"tile\":{tile},\"width\":{},\"height\":{}}}",
-                args.frames, scene.image.width, scene.image.height
+                "{{\"bake_ms\":{bake_ms:.3},\"frames\":{},\"median_frame_ms\":{median:.3},\"min_frame_ms\":{min:.3},\"max_frame_ms\":{max:.3},\"mad_frame_ms\":{mad:.3},\"fps\":{fps:.3},\"peak_memory_mib\":{},\"fragments_per_frame\":{fragments},\"fragments_per_s\":{fragments_per_s:.0},\"threads\":{threads},\"tile\":{tile},\"width\":{},\"height\":{}}}",
+                args.frames,
+                peak_mib.map_or("null".to_string(), |m| format!("{m:.1}")),
+                scene.image.width,
+                scene.image.height
             )
         } else {
             format!(
-                "bake {bake_ms:.1} ms\nframes {} at {}×{}, {threads} threads, tile {tile}\nmedian frame {median:.2} ms (min {min:.2}, max {max:.2})\nfps {fps:.2}\nfragments shaded per frame {fragments}, {:.1} M/s",
+                "bake {bake_ms:.1} ms\nframes {} at {}×{}, {threads} threads, tile {tile}\nmedian frame {median:.2} ms (min {min:.2}, max {max:.2}, median absolute deviation {mad:.2})\nfps {fps:.2}\nfragments shaded per frame {fragments}, {:.1} M/s\npeak memory {}",
                 args.frames,
                 scene.image.width,
                 scene.image.height,
-                fragments_per_s / 1e6
+                fragments_per_s / 1e6,
+                peak_mib.map_or("unknown on this system".to_string(), |m| format!(
+                    "{m:.1} MiB"
+                ))
             )
         })
     })??;
     println!("{report}");
     Ok(())
+}
+
+/// The process's peak resident memory (Linux `VmHWM`), or `None` where it cannot be read.
+fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
