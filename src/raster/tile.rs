@@ -89,8 +89,49 @@ impl std::ops::AddAssign for RasterStats {
 }
 
 /// Rasterizes one set-up triangle into the part of it that lies in `target`.
+///
+/// The common fixed-function states are compiled into their own copies of the quad loop, so the
+/// per-fragment depth test, depth write and blend carry no run-time dispatch; every other state
+/// takes the general copy. All copies compute the same values.
 #[inline]
 pub(crate) fn rasterize_triangle<V, F>(
+    tri: &SetupTriangle,
+    varyings: &[V; 3],
+    state: &DrawState,
+    shader: &F,
+    target: &mut TileTarget,
+    stats: &mut RasterStats,
+) where
+    V: Varyings,
+    F: Fn(&Fragment<V>) -> Option<Vec4>,
+{
+    use {BlendMode as B, DepthCompare as D};
+    match (state.depth_compare, state.blend, state.depth_write) {
+        // Blended layers over an opaque base (shells, fins): test, no write.
+        (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, F, LESS_EQUAL, ALPHA, NO>(
+            tri, varyings, state, shader, target, stats,
+        ),
+        // Opaque geometry.
+        (D::Less, B::Replace, true) => {
+            rasterize_quads::<V, F, LESS, REPLACE, YES>(tri, varyings, state, shader, target, stats)
+        }
+        _ => rasterize_quads::<V, F, DYNAMIC, DYNAMIC, DYNAMIC>(
+            tri, varyings, state, shader, target, stats,
+        ),
+    }
+}
+
+/// Const parameters of [`rasterize_quads`]: a fixed choice, or `DYNAMIC` (read the state).
+const DYNAMIC: u8 = 0;
+const LESS: u8 = 1;
+const LESS_EQUAL: u8 = 2;
+const ALPHA: u8 = 1;
+const REPLACE: u8 = 2;
+const NO: u8 = 1;
+const YES: u8 = 2;
+
+#[inline(always)]
+fn rasterize_quads<V, F, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     tri: &SetupTriangle,
     varyings: &[V; 3],
     state: &DrawState,
@@ -164,10 +205,11 @@ pub(crate) fn rasterize_triangle<V, F>(
             let perspective = sum.cmpgt(Vec4::ZERO) & sum.is_finite_mask();
             let inv = Vec4::ONE / sum;
             let b = [
-                Vec4::select(perspective, p[0] * inv, l[0]),
-                Vec4::select(perspective, p[1] * inv, l[1]),
-                Vec4::select(perspective, p[2] * inv, l[2]),
+                Vec4::select(perspective, p[0] * inv, l[0]).to_array(),
+                Vec4::select(perspective, p[1] * inv, l[1]).to_array(),
+                Vec4::select(perspective, p[2] * inv, l[2]).to_array(),
             ];
+            let z = z.to_array();
             for (lane, q) in quad.iter_mut().enumerate() {
                 *q = V::weighted_sum(
                     &varyings[0],
@@ -178,17 +220,23 @@ pub(crate) fn rasterize_triangle<V, F>(
                     b[2][lane],
                 );
             }
+            let quad_index = (qy - tile.y0) as usize * tile_width + (qx - tile.x0) as usize;
+            let lane_offsets = [0, 1, tile_width, tile_width + 1];
             for lane in 0..4 {
                 if mask & (1 << lane) == 0 {
                     continue;
                 }
                 let (x, y) = (qx + (lane as u32 & 1), qy + (lane as u32 >> 1));
-                let index = (y - tile.y0) as usize * tile_width + (x - tile.x0) as usize;
+                let index = quad_index + lane_offsets[lane];
                 let depth_z = z[lane];
-                let pass = match state.depth_compare {
-                    DepthCompare::Always => true,
-                    DepthCompare::Less => depth_z < target.depth[index],
-                    DepthCompare::LessEqual => depth_z <= target.depth[index],
+                let pass = match DEPTH {
+                    LESS => depth_z < target.depth[index],
+                    LESS_EQUAL => depth_z <= target.depth[index],
+                    _ => match state.depth_compare {
+                        DepthCompare::Always => true,
+                        DepthCompare::Less => depth_z < target.depth[index],
+                        DepthCompare::LessEqual => depth_z <= target.depth[index],
+                    },
                 };
                 if !pass {
                     continue;
@@ -206,11 +254,21 @@ pub(crate) fn rasterize_triangle<V, F>(
                     continue;
                 };
                 written += 1;
-                if state.depth_write {
+                let write_depth = match WRITE {
+                    NO => false,
+                    YES => true,
+                    _ => state.depth_write,
+                };
+                if write_depth {
                     target.depth[index] = depth_z;
                 }
                 let dst = &mut target.colour[index];
-                *dst = blend(state.blend, colour, *dst);
+                let mode = match BLEND {
+                    ALPHA => BlendMode::Alpha,
+                    REPLACE => BlendMode::Replace,
+                    _ => state.blend,
+                };
+                *dst = blend(mode, colour, *dst);
             }
             qx += 2;
         }
@@ -228,9 +286,10 @@ pub fn blend(mode: BlendMode, src: Vec4, dst: Vec4) -> Vec4 {
     match mode {
         BlendMode::Replace => src,
         BlendMode::Alpha => {
+            // One 4-lane multiply-add: the alpha lane's factor 1 keeps `a` exact, so each lane
+            // is the formula's own two products and one sum.
             let a = src.w;
-            let rgb = src.truncate() * a + dst.truncate() * (1.0 - a);
-            rgb.extend(a + dst.w * (1.0 - a))
+            src * Vec4::new(a, a, a, 1.0) + dst * (1.0 - a)
         }
         BlendMode::Add => src + dst,
     }
@@ -250,6 +309,34 @@ mod tests {
             assert!((o - e).abs() < 1e-7, "{out:?}");
         }
         assert_eq!(blend(BlendMode::Replace, src, dst), src);
+    }
+
+    #[test]
+    fn alpha_blend_is_the_per_channel_formula_bit_for_bit() {
+        let mut x = 0x2545_f491u32;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1u32 << 24) as f32 * 1.5 - 0.25
+        };
+        for _ in 0..10_000 {
+            let src = Vec4::new(next(), next(), next(), next());
+            let dst = Vec4::new(next(), next(), next(), next());
+            let a = src.w;
+            let expect = [
+                src.x * a + dst.x * (1.0 - a),
+                src.y * a + dst.y * (1.0 - a),
+                src.z * a + dst.z * (1.0 - a),
+                a + dst.w * (1.0 - a),
+            ];
+            let got = blend(BlendMode::Alpha, src, dst).to_array();
+            assert_eq!(
+                got.map(f32::to_bits),
+                expect.map(f32::to_bits),
+                "{src} over {dst}"
+            );
+        }
     }
 
     #[test]
