@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod compare;
 pub mod fur;
 pub mod mesh;
 pub mod output;

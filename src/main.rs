@@ -8,6 +8,7 @@ mod cli;
 use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
+use cli::compare::CompareArgs;
 use cli::render::RenderArgs;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,6 +30,8 @@ enum Command {
     Render(RenderArgs),
     /// Time baking and frames of a scene.
     Bench(BenchArgs),
+    /// Compare two images (reference, test): metrics, heat map, exit 1 outside the tolerance.
+    Compare(CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +53,7 @@ fn main() -> ExitCode {
     let result = match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Compare(args) => cli::compare::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,6 +8,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 pub mod bench;
+pub mod compare;
 pub mod render;
 
 /// The arguments every scene-reading subcommand takes.
