@@ -12,7 +12,10 @@
 
 pub mod camera;
 pub mod compare;
+pub mod export;
 pub mod fur;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod mesh;
 pub mod output;
 pub mod raster;

@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
 use cli::compare::CompareArgs;
+use cli::export::ExportArgs;
 use cli::render::RenderArgs;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -32,6 +33,8 @@ enum Command {
     Bench(BenchArgs),
     /// Compare two images (reference, test): metrics, heat map, exit 1 outside the tolerance.
     Compare(CompareArgs),
+    /// Export textures, meshes, parameters and the oracle's render for a GPU implementation.
+    Export(ExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,11 +52,13 @@ fn main() -> ExitCode {
         frames: None,
         fps: 10.0,
         animation: None,
+        backend: cli::render::Backend::Cpu,
     }));
     let result = match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Compare(args) => cli::compare::run(args),
+        Command::Export(args) => cli::export::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 
 pub mod bench;
 pub mod compare;
+pub mod export;
+pub mod gpu_render;
 pub mod render;
 
 /// The arguments every scene-reading subcommand takes.
