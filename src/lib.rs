@@ -11,7 +11,11 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod compare;
+pub mod export;
 pub mod fur;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod mesh;
 pub mod output;
 pub mod raster;

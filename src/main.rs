@@ -8,6 +8,8 @@ mod cli;
 use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
+use cli::compare::CompareArgs;
+use cli::export::ExportArgs;
 use cli::render::RenderArgs;
 use cli::sweep::{MergeArgs, SweepArgs};
 use std::path::PathBuf;
@@ -34,6 +36,10 @@ enum Command {
     Sweep(SweepArgs),
     /// Merge the folders of sweep shards (--shard I/N) into one sweep folder.
     SweepMerge(MergeArgs),
+    /// Compare two images (reference, test): metrics, heat map, exit 1 outside the tolerance.
+    Compare(CompareArgs),
+    /// Export textures, meshes, parameters and the oracle's render for a GPU implementation.
+    Export(ExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -51,12 +57,15 @@ fn main() -> ExitCode {
         frames: None,
         fps: 10.0,
         animation: None,
+        backend: cli::render::Backend::Cpu,
     }));
     let result = match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Sweep(args) => cli::sweep::run(args),
         Command::SweepMerge(args) => cli::sweep::merge(args),
+        Command::Compare(args) => cli::compare::run(args),
+        Command::Export(args) => cli::export::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -8,6 +8,9 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 pub mod bench;
+pub mod compare;
+pub mod export;
+pub mod gpu_render;
 pub mod render;
 pub mod sweep;
 

@@ -23,11 +23,26 @@ pub struct RenderArgs {
     /// Also write the animation as an animated GIF to this path.
     #[arg(long, requires = "frames")]
     pub animation: Option<PathBuf>,
+    /// Which renderer draws the frame: the CPU oracle, or wgpu (built with `--features gpu`).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+}
+
+/// The renderer behind `--backend`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// The deterministic software oracle.
+    Cpu,
+    /// wgpu with the WGSL mirror of the fragment closures (feature `gpu`).
+    Gpu,
 }
 
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
     let tile = args.common.tile;
+    if args.backend == Backend::Gpu {
+        return super::gpu_render::run(&scene, &args);
+    }
     if let Some(frames) = args.frames {
         return render_animation(&scene, &args, frames, tile);
     }

@@ -12,7 +12,7 @@
 //! - The skin under the fur is the fur colour darkened: `colour · 0.35 · (0.5 + 0.5·max(0, n·l))`.
 //! - All texture reads of one fragment use the level of detail of the fur uv's derivatives.
 
-mod fragment;
+pub mod fragment;
 
 use crate::camera::Camera;
 use crate::fur::{self, FurParams};
@@ -589,5 +589,79 @@ impl PreparedScene {
             triangles.push([base, base + 2, base + 3]);
         }
         (vertices, triangles)
+    }
+
+    /// Number of shell layers (root = 0).
+    pub fn shell_count(&self) -> usize {
+        self.shells.len()
+    }
+
+    /// The colour and tangent textures (with their mip chains) of shell layer `i`, root = 0.
+    pub fn shell_textures(&self, i: usize) -> Option<(&Texture, &Texture)> {
+        self.shells.get(i).map(|t| (&t.colour, &t.tangent))
+    }
+
+    /// Distance of each shell layer above the skin along the vertex normal, world units.
+    pub fn shell_offsets(&self) -> &[f32] {
+        &self.shell_offsets
+    }
+
+    /// The fin colour and tangent textures, when the scene has fins.
+    pub fn fin_textures(&self) -> Option<(&Texture, &Texture)> {
+        self.fin.as_ref().map(|t| (&t.colour, &t.tangent))
+    }
+
+    /// Height of the fins above the skin, world units.
+    pub fn fin_height(&self) -> f32 {
+        self.fin_height
+    }
+
+    /// Mean world size of one fur tile along u and v.
+    pub fn tile_world_size(&self) -> Vec2 {
+        self.tile_world_size
+    }
+
+    /// The shading parameters of a frame at `time`, as the fragment closures see them.
+    pub fn shade_params_at(&self, time: f32) -> ShadeParams {
+        ShadeParams::from_scene(&self.scene, time)
+    }
+
+    /// The per-layer parameters of shell `i`, as the shell pass hands them to the fragment
+    /// closure.
+    pub fn shell_layer_params(&self, i: u32) -> LayerParams {
+        let s = &self.scene;
+        let n = s.fur.number_of_shells;
+        LayerParams {
+            index: i,
+            max_shell: n - 1,
+            lookups: crate::shading::shadow_lookup_count(n, i, s.shading.shadow_divisor),
+            height_fraction: i as f32 / n as f32,
+        }
+    }
+
+    /// The fin quads drawn at `time` (chosen on the CPU per frame, as the thesis does): each
+    /// vertex's object-space position with its fur varyings, and the triangles.
+    pub fn fin_quads_at(&self, time: f32) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
+        let s = &self.scene;
+        let wind = s.wind.as_ref().map(|w| {
+            let params = crate::shading::WindParams {
+                direction: w.direction,
+                strength: w.strength,
+                frequency: w.frequency,
+                elasticity: w.elasticity,
+                max_bend: w.max_bend,
+            };
+            (
+                w.direction.normalize_or_zero(),
+                crate::shading::wind_force(time, &params),
+            )
+        });
+        let shade = ShadeParams::from_scene(s, time);
+        self.fin_geometry(
+            s.camera.eye,
+            s.light.direction.normalize_or_zero(),
+            wind,
+            &shade,
+        )
     }
 }

@@ -1,0 +1,543 @@
+//! Export: everything a GPU implementation needs to draw the same frame as the oracle, written
+//! to one folder by [`export`]:
+//!
+//! ```text
+//! DIR/scene.json                       every parameter and uniform (see below)
+//! DIR/oracle.png                       the oracle's render of this frame
+//! DIR/meshes/fur.gltf, fur.bin         skin, every shell layer, this frame's fins (glTF 2.0)
+//! DIR/textures/shell_NN_colour.png     shell layer NN (root = 00), mip level 0
+//! DIR/textures/shell_NN_tangent.png
+//! DIR/textures/fin_colour.png, fin_tangent.png
+//! DIR/textures/mips/<name>_L.png       mip level L ≥ 1 of each texture above
+//! ```
+//!
+//! **Textures.** RGBA8 PNG, no colour space (linear values), row 0 at `v = 0`: upload as is.
+//! Colour maps hold the strand colour and a straight (not premultiplied) alpha. Tangent maps
+//! hold `unorm8(t·0.5 + 0.5)` of the unit strand tangent in tangent space (x = texture u,
+//! y = texture v, z = away from the skin), alpha equal to the colour map's; decode with
+//! `normalize(texel.rgb·2 − 1)`. The mip chain is pelage's own (each texel the rounded mean
+//! `(a + b + c + d + 2) >> 2` of the 2×2 block below it); use the exported levels rather
+//! than the GPU's mip generation to sample the same values.
+//!
+//! **Meshes.** `fur.gltf` holds one mesh per pass, drawn in this order:
+//! - `skin`: `POSITION`, `NORMAL`, `TANGENT` (xyz = frame T along +u, w = ±1 with
+//!   `B = w·(N × T)`), `TEXCOORD_0` (mesh uv; the fur uv is `uv × texture_repeat`), and the
+//!   application-specific `_BINORMAL` (frame B), `_DPDU`, `_DPDV` (∂p/∂u, ∂p/∂v, unnormalised:
+//!   the shadow and wind projections need them);
+//! - `shell_NN`: the skin pushed out along `NORMAL` by `layers[NN].offset` (its own
+//!   `POSITION`; every other attribute and the indices shared with `skin`); the wind's vertex
+//!   displacement (thesis 3.3) is applied on top per frame, see `scene.json`'s `frame.wind`;
+//! - `fins`: this frame's silhouette fins (view dependent, chosen on the CPU), with `POSITION`,
+//!   `NORMAL` (the root's vertex normal), `TEXCOORD_0` (fin uv, v = 0 at the root) and the fur
+//!   varyings of the oracle's fragment stage at each corner: `_LIGHT`, `_EYE` (tangent space of
+//!   the fin), `_FADE`, `_OBJECT` (the root point, object space).
+//!
+//! Triangles are counter-clockwise seen from outside; indices are u32.
+//!
+//! **scene.json.** `scene` repeats the scene file with every default filled in (the names of
+//! the TOML keys); `camera` has the column-major `view`, `projection` and `view_projection`
+//! matrices; `frame` the values resolved at the exported instant (unit light direction, wind
+//! force, burn exponent, spots in application order); `layers` the per-shell uniforms
+//! (offset, shadow lookups, height fraction, texture files); `fin`, `pipeline` (depth, blend,
+//! cull, samplers) and `conventions` say the rest.
+
+use crate::camera::Camera;
+use crate::raster::Texture;
+use crate::render::fragment::{ALPHA_DISCARD, Spot};
+use crate::render::{PreparedScene, RenderError};
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+/// What can go wrong exporting.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// The oracle render failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// A file could not be written.
+    #[error("{path}: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+/// What [`export`] wrote.
+#[derive(Clone, Debug, Default)]
+pub struct ExportSummary {
+    /// Every file written, relative to the export folder.
+    pub files: Vec<PathBuf>,
+}
+
+struct Writer<'a> {
+    dir: &'a Path,
+    files: Vec<PathBuf>,
+}
+
+impl Writer<'_> {
+    fn write(&mut self, relative: &str, bytes: &[u8]) -> Result<(), ExportError> {
+        let path = self.dir.join(relative);
+        let fail = |e: String| ExportError::Write {
+            path: path.clone(),
+            message: e,
+        };
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| fail(e.to_string()))?;
+        }
+        crate::output::write_atomic(&path, bytes).map_err(|e| fail(e.message))?;
+        self.files.push(PathBuf::from(relative));
+        Ok(())
+    }
+
+    fn png(
+        &mut self,
+        relative: &str,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+    ) -> Result<(), ExportError> {
+        let bytes =
+            crate::output::encode_png(width, height, rgba).map_err(|e| ExportError::Write {
+                path: self.dir.join(relative),
+                message: e,
+            })?;
+        self.write(relative, &bytes)
+    }
+
+    /// Level 0 as `textures/NAME.png`, levels ≥ 1 as `textures/mips/NAME_L.png`.
+    fn texture(&mut self, name: &str, texture: &Texture) -> Result<String, ExportError> {
+        for k in 0..texture.level_count() {
+            let level = texture.level(k).expect("level in range");
+            let rgba: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            let relative = if k == 0 {
+                format!("textures/{name}.png")
+            } else {
+                format!("textures/mips/{name}_{k}.png")
+            };
+            self.png(&relative, level.width, level.height, &rgba)?;
+        }
+        Ok(format!("textures/{name}.png"))
+    }
+}
+
+/// Writes the export of `prepared` at `time` (seconds) into `dir` (created if missing): the
+/// oracle's render, textures, meshes and `scene.json`; see the [module docs](self).
+pub fn export(
+    prepared: &PreparedScene,
+    time: f32,
+    dir: &Path,
+) -> Result<ExportSummary, ExportError> {
+    let mut w = Writer {
+        dir,
+        files: Vec::new(),
+    };
+    let image = prepared.render_at(time, crate::raster::DEFAULT_TILE_SIZE)?;
+    w.png("oracle.png", image.width, image.height, &image.rgba8)?;
+
+    let mut layers = Vec::new();
+    for i in 0..prepared.shell_count() {
+        let (colour, tangent) = prepared.shell_textures(i).expect("layer in range");
+        let colour_file = w.texture(&format!("shell_{i:02}_colour"), colour)?;
+        let tangent_file = w.texture(&format!("shell_{i:02}_tangent"), tangent)?;
+        let p = prepared.shell_layer_params(i as u32);
+        layers.push(json!({
+            "index": p.index,
+            "offset": prepared.shell_offsets()[i],
+            "shadow_lookups": p.lookups,
+            "height_fraction": p.height_fraction,
+            "max_shell": p.max_shell,
+            "colour_texture": colour_file,
+            "tangent_texture": tangent_file,
+            "mip_levels": colour.level_count(),
+        }));
+    }
+    let fin = match prepared.fin_textures() {
+        Some((colour, tangent)) => {
+            let colour_file = w.texture("fin_colour", colour)?;
+            let tangent_file = w.texture("fin_tangent", tangent)?;
+            json!({
+                "height": prepared.fin_height(),
+                "colour_texture": colour_file,
+                "tangent_texture": tangent_file,
+                "mip_levels": colour.level_count(),
+                "layer": { "index": prepared.scene().fur.number_of_shells - 1, "shadow_lookups": 0, "height_fraction": 1.0 },
+                "sampler": { "address_u": "wrap", "address_v": "clamp", "filter": "trilinear" },
+            })
+        }
+        None => Value::Null,
+    };
+
+    let (gltf, bin) = gltf(prepared, time);
+    w.write("meshes/fur.bin", &bin)?;
+    let text = serde_json::to_string_pretty(&gltf).expect("JSON of plain values");
+    w.write("meshes/fur.gltf", text.as_bytes())?;
+
+    let json = scene_json(prepared, time, layers, fin);
+    let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
+    w.write("scene.json", text.as_bytes())?;
+    Ok(ExportSummary { files: w.files })
+}
+
+/// The camera of a scene, as the renderer builds it.
+pub fn camera(scene: &Scene) -> Camera {
+    Camera {
+        eye: scene.camera.eye,
+        target: scene.camera.target,
+        up: scene.camera.up,
+        fov_y_deg: scene.camera.fov_y_deg,
+        near: scene.camera.near,
+        far: scene.camera.far,
+    }
+}
+
+fn debug_name<T: std::fmt::Debug>(v: T) -> String {
+    // Scene enums are written in the TOML's snake_case.
+    let name = format!("{v:?}");
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The scene with every default filled in, under the TOML's key names.
+pub fn scene_values(s: &Scene) -> Value {
+    json!({
+        "seed": s.seed,
+        "time": s.time,
+        "image": { "width": s.image.width, "height": s.image.height, "background": s.image.background },
+        "camera": {
+            "eye": s.camera.eye, "target": s.camera.target, "up": s.camera.up,
+            "fov_y_deg": s.camera.fov_y_deg, "near": s.camera.near, "far": s.camera.far,
+        },
+        "mesh": {
+            "kind": debug_name(s.mesh.kind), "major_radius": s.mesh.major_radius,
+            "minor_radius": s.mesh.minor_radius, "radius": s.mesh.radius, "height": s.mesh.height,
+            "model_resolution": s.mesh.model_resolution,
+            "path": s.mesh.path.as_ref().map(|p| s.base_dir.join(p).display().to_string()),
+            "scale": s.mesh.scale,
+        },
+        "fur": {
+            "number_of_strands": s.fur.number_of_strands,
+            "strand_resolution": s.fur.strand_resolution,
+            "circle_resolution": s.fur.circle_resolution,
+            "number_of_shells": s.fur.number_of_shells,
+            "texture_resolution": s.fur.texture_resolution,
+            "model_difference": s.fur.model_difference,
+            "shell_spacing": debug_name(s.fur.shell_spacing),
+            "texture_repeat": s.fur.texture_repeat,
+            "colour": s.fur.colour,
+            "colour_variation": s.fur.colour_variation,
+            "slope_deg": s.fur.slope_deg,
+            "curl": s.fur.curl,
+            "jitter": s.fur.jitter,
+            "min_height": s.fur.min_height,
+            "base_thickness": s.fur.base_thickness,
+            "tip_thickness": s.fur.tip_thickness,
+            "supersample": s.fur.supersample,
+            "gaussian_sigma": s.fur.gaussian_sigma,
+            "fins": s.fur.fins,
+            "fin_windows": s.fur.fin_windows,
+            "fin_height_scale": s.fur.fin_height_scale,
+        },
+        "shading": {
+            "ambient": s.shading.ambient,
+            "banks_exponent": s.shading.banks_exponent,
+            "specular_exponent": s.shading.specular_exponent,
+            "dampened_exponent": s.shading.dampened_exponent,
+            "specular_tangents": s.shading.specular_tangents,
+            "tangent_shift": s.shading.tangent_shift,
+            "shadow_divisor": s.shading.shadow_divisor,
+            "weights": {
+                "ambient": s.shading.weights.ambient, "diffuse": s.shading.weights.diffuse,
+                "specular": s.shading.weights.specular, "dampened": s.shading.weights.dampened,
+                "shadow": s.shading.weights.shadow,
+            },
+            "debug_view": debug_name(s.shading.debug_view),
+        },
+        "light": { "direction": s.light.direction, "colour": s.light.colour },
+        "spots": s.spots.iter().map(|p| json!({
+            "kind": debug_name(p.kind), "colour": p.colour, "centre": p.centre, "radii": p.radii,
+            "inner": p.inner, "direction": p.direction, "exponent": p.exponent,
+            "inner_threshold": p.inner_threshold, "outer_threshold": p.outer_threshold,
+        })).collect::<Vec<_>>(),
+        "stripes": s.stripes.iter().map(|p| json!({
+            "colour": p.colour, "axis": p.axis, "period": p.period, "width": p.width,
+            "softness": p.softness,
+        })).collect::<Vec<_>>(),
+        "wind": s.wind.as_ref().map(|w| json!({
+            "direction": w.direction, "strength": w.strength, "frequency": w.frequency,
+            "elasticity": w.elasticity, "max_bend": w.max_bend,
+            "tangent_fraction": w.tangent_fraction,
+        })),
+        "burn": s.burn.as_ref().map(|b| json!({
+            "matches": b.matches, "start": b.start, "high_exponent": b.high_exponent,
+            "low_exponent": b.low_exponent, "spread_duration": b.spread_duration,
+        })),
+    })
+}
+
+fn spot_json(spot: &Spot) -> Value {
+    match *spot {
+        Spot::Ellipsoid {
+            centre,
+            radii,
+            inner,
+            colour,
+        } => {
+            json!({ "kind": "ellipsoid", "centre": centre, "radii": radii, "inner": inner, "colour": colour })
+        }
+        Spot::Light {
+            direction,
+            exponent,
+            inner_threshold,
+            outer_threshold,
+            colour,
+            ..
+        } => json!({
+            "kind": "light", "direction_unit": direction, "exponent": exponent,
+            "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
+        }),
+        Spot::Stripe {
+            axis,
+            period,
+            width,
+            softness,
+            colour,
+        } => json!({
+            "kind": "stripe", "axis_unit": axis, "period": period, "width": width,
+            "softness": softness, "colour": colour,
+        }),
+    }
+}
+
+fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Value) -> Value {
+    let s = prepared.scene();
+    let cam = camera(s);
+    let aspect = s.image.width as f32 / s.image.height as f32;
+    let shade = prepared.shade_params_at(time);
+    let wind = s.wind.as_ref().map(|w| {
+        let params = crate::shading::WindParams {
+            direction: w.direction,
+            strength: w.strength,
+            frequency: w.frequency,
+            elasticity: w.elasticity,
+            max_bend: w.max_bend,
+        };
+        json!({
+            "direction_unit": w.direction.normalize_or_zero(),
+            "force": crate::shading::wind_force(time, &params),
+            "tangent_fraction": w.tangent_fraction,
+        })
+    });
+    json!({
+        "format": "pelage export 1",
+        "time": time,
+        "files": { "render": "oracle.png", "meshes": "meshes/fur.gltf" },
+        "scene": scene_values(s),
+        "camera": {
+            "aspect": aspect,
+            "view": cam.view().to_cols_array(),
+            "projection": cam.projection(aspect).to_cols_array(),
+            "view_projection": cam.view_projection(aspect).to_cols_array(),
+        },
+        "frame": {
+            "light_direction_unit": s.light.direction.normalize_or_zero(),
+            "light_colour": shade.light_colour,
+            "eye": s.camera.eye,
+            "skin_colour": s.fur.colour * 0.35,
+            "texture_repeat": s.fur.texture_repeat,
+            "tile_world_size": prepared.tile_world_size(),
+            "wind": wind,
+            "burn": shade.burn.as_ref().map(|b| json!({ "exponent": b.exponent, "matches_unit": b.matches })),
+            "spots": shade.spots.iter().map(spot_json).collect::<Vec<_>>(),
+            "alpha_discard": ALPHA_DISCARD,
+            "burn_threshold": crate::shading::BURN_THRESHOLD,
+        },
+        "layers": layers,
+        "fin": fin,
+        "pipeline": {
+            "clear_colour": s.image.background.extend(1.0),
+            "clear_depth": 1.0,
+            "skin": { "depth_compare": "less", "depth_write": true, "blend": "replace", "cull": "back" },
+            "shells": { "depth_compare": "less_equal", "depth_write": false, "blend": "alpha", "cull": "back", "order": "root to tip" },
+            "fins": { "depth_compare": "less_equal", "depth_write": false, "blend": "alpha", "cull": "none" },
+            "blend_alpha": "colour = src·a + dst·(1 − a); alpha = a + dst·(1 − a)",
+            "front_face": "counter-clockwise in NDC (y up)",
+            "shell_sampler": { "address_u": "wrap", "address_v": "wrap", "filter": "trilinear" },
+            "level_of_detail": "λ = log2(max(|ddx(uv)·size|, |ddy(uv)·size|)) from coarse derivatives of the fur uv (before the wind offset), clamped to [0, levels − 1]",
+            "shadow_lookups": "texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋, alpha channel",
+        },
+        "conventions": {
+            "clip_space": "0 ≤ z ≤ w (wgpu/Vulkan/D3D)",
+            "output": "8-bit channel = ⌊255·clamp(c, 0, 1) + 0.5⌋, no colour-space conversion",
+            "texel": "byte / 255, linear",
+            "tangent_encoding": "unorm8(t·0.5 + 0.5), tangent space (x = u, y = v, z = away from skin)",
+            "fragment_order": "burn (3.4), wind reverse lookup (3.3), colour and tangent maps, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), shell shadow (3.2.2), Kajiya–Kay (2.5, 2.7), dampened specular, eq. 3.7",
+        },
+    })
+}
+
+/// A glTF 2.0 document and its binary buffer, built accessor by accessor.
+#[derive(Default)]
+struct GltfBuilder {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl GltfBuilder {
+    fn align(&mut self) {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+    }
+
+    /// Float vectors of `n` components; returns the accessor index. `bounds` adds min/max
+    /// (required on POSITION).
+    fn floats(&mut self, data: &[f32], n: usize, bounds: bool) -> usize {
+        self.align();
+        let offset = self.bin.len();
+        for v in data {
+            self.bin.extend_from_slice(&v.to_le_bytes());
+        }
+        self.views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4, "target": 34962 }));
+        let kind = match n {
+            1 => "SCALAR",
+            2 => "VEC2",
+            3 => "VEC3",
+            _ => "VEC4",
+        };
+        let mut accessor = json!({
+            "bufferView": self.views.len() - 1, "componentType": 5126,
+            "count": data.len() / n, "type": kind,
+        });
+        if bounds {
+            let mut lo = vec![f32::INFINITY; n];
+            let mut hi = vec![f32::NEG_INFINITY; n];
+            for c in data.chunks_exact(n) {
+                for k in 0..n {
+                    lo[k] = lo[k].min(c[k]);
+                    hi[k] = hi[k].max(c[k]);
+                }
+            }
+            accessor["min"] = json!(lo);
+            accessor["max"] = json!(hi);
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    fn vec3s(&mut self, data: impl Iterator<Item = Vec3>, bounds: bool) -> usize {
+        let flat: Vec<f32> = data.flat_map(|v| v.to_array()).collect();
+        self.floats(&flat, 3, bounds)
+    }
+
+    fn vec2s(&mut self, data: impl Iterator<Item = Vec2>) -> usize {
+        let flat: Vec<f32> = data.flat_map(|v| v.to_array()).collect();
+        self.floats(&flat, 2, false)
+    }
+
+    fn indices(&mut self, triangles: &[[u32; 3]]) -> usize {
+        self.align();
+        let offset = self.bin.len();
+        for i in triangles.iter().flatten() {
+            self.bin.extend_from_slice(&i.to_le_bytes());
+        }
+        self.views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": triangles.len() * 12, "target": 34963 }));
+        self.accessors.push(json!({
+            "bufferView": self.views.len() - 1, "componentType": 5125,
+            "count": triangles.len() * 3, "type": "SCALAR",
+        }));
+        self.accessors.len() - 1
+    }
+}
+
+fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
+    let mesh = prepared.mesh();
+    let v = &mesh.vertices;
+    let mut b = GltfBuilder::default();
+    let mut meshes = Vec::new();
+    if !v.is_empty() && !mesh.indices.is_empty() {
+        let position = b.vec3s(v.iter().map(|v| v.position), true);
+        let normal = b.vec3s(v.iter().map(|v| v.normal), false);
+        let tangent: Vec<f32> = v
+            .iter()
+            .flat_map(|v| {
+                let f = &v.frame;
+                let w = if f.normal.cross(f.tangent).dot(f.binormal) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                [f.tangent.x, f.tangent.y, f.tangent.z, w]
+            })
+            .collect();
+        let tangent = b.floats(&tangent, 4, false);
+        let uv = b.vec2s(v.iter().map(|v| v.uv));
+        let binormal = b.vec3s(v.iter().map(|v| v.frame.binormal), false);
+        let dpdu = b.vec3s(v.iter().map(|v| v.dpdu), false);
+        let dpdv = b.vec3s(v.iter().map(|v| v.dpdv), false);
+        let indices = b.indices(&mesh.indices);
+        let primitive = |position: usize| {
+            json!({
+                "attributes": {
+                    "POSITION": position, "NORMAL": normal, "TANGENT": tangent, "TEXCOORD_0": uv,
+                    "_BINORMAL": binormal, "_DPDU": dpdu, "_DPDV": dpdv,
+                },
+                "indices": indices, "mode": 4,
+            })
+        };
+        meshes.push(json!({ "name": "skin", "primitives": [primitive(position)] }));
+        for (i, &offset) in prepared.shell_offsets().iter().enumerate() {
+            let p = b.vec3s(v.iter().map(|v| v.position + v.normal * offset), true);
+            meshes.push(json!({ "name": format!("shell_{i:02}"), "primitives": [primitive(p)] }));
+        }
+    }
+    let (fin_vertices, fin_triangles) = prepared.fin_quads_at(time);
+    if !fin_triangles.is_empty() && prepared.fin_textures().is_some() {
+        let position = b.vec3s(fin_vertices.iter().map(|(p, _)| *p), true);
+        let normal = b.vec3s(fin_vertices.iter().map(|(_, f)| f.normal), false);
+        let uv = b.vec2s(fin_vertices.iter().map(|(_, f)| f.uv));
+        let light = b.vec3s(fin_vertices.iter().map(|(_, f)| f.light), false);
+        let eye = b.vec3s(fin_vertices.iter().map(|(_, f)| f.eye), false);
+        let fade: Vec<f32> = fin_vertices.iter().map(|(_, f)| f.fade).collect();
+        let fade = b.floats(&fade, 1, false);
+        let object = b.vec3s(fin_vertices.iter().map(|(_, f)| f.object), false);
+        let indices = b.indices(&fin_triangles);
+        meshes.push(json!({ "name": "fins", "primitives": [{
+            "attributes": {
+                "POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv,
+                "_LIGHT": light, "_EYE": eye, "_FADE": fade, "_OBJECT": object,
+            },
+            "indices": indices, "mode": 4,
+        }]}));
+    }
+    let nodes: Vec<Value> = meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| json!({ "name": m["name"], "mesh": i }))
+        .collect();
+    let doc = json!({
+        "asset": { "version": "2.0", "generator": "pelage export" },
+        "scene": 0,
+        "scenes": [{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
+        "nodes": nodes,
+        "meshes": meshes,
+        "buffers": [{ "uri": "fur.bin", "byteLength": b.bin.len() }],
+        "bufferViews": b.views,
+        "accessors": b.accessors,
+    });
+    (doc, b.bin)
+}

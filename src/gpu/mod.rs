@@ -1,0 +1,913 @@
+//! The GPU backend (feature `gpu`): the same frame as [`PreparedScene::render_at`], drawn by
+//! wgpu from the same baked data, headless (no window, no surface).
+//!
+//! What is shared with the oracle and what is the GPU's own:
+//! - **Shared data**: the mesh and its tangent frames, the shell and fin textures *with the
+//!   oracle's mip chains* (uploaded level by level, not regenerated), the shell offsets, the
+//!   shading parameters resolved at the instant ([`PreparedScene::shade_params_at`]), and the
+//!   fin quads of the frame ([`PreparedScene::fin_quads_at`]: silhouette edges are found on the
+//!   CPU, as in the thesis).
+//! - **Mirrored code**: `fur.wgsl` holds the vertex closures of the shell pass and the fragment
+//!   closure `shade_fur` term by term, each WGSL function named after the Rust function it
+//!   mirrors, with the thesis equation numbers in comments.
+//! - **The GPU's own**: rasterization, clipping and perspective-correct interpolation; the
+//!   sampler's trilinear filter (at the level of detail the shader computes from coarse
+//!   derivatives, as the oracle does); `pow`, `log2`, `sqrt`; blending. The colour target is
+//!   `Rgba32Float` when the adapter can blend it (lavapipe can), else `Rgba16Float`; it is read
+//!   back and rounded to 8 bits on the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
+//!
+//! Adapters: Vulkan only. By default the CPU adapter (Mesa's lavapipe) is preferred, so the
+//! comparison is the same on every machine; with [`AdapterChoice::Any`] the first adapter
+//! wgpu's default choice gives (a hardware GPU where there is one).
+
+use crate::render::PreparedScene;
+use crate::render::fragment::Spot;
+use crate::scene::DebugView;
+use glam::{Mat4, Vec3, Vec4};
+use image::RgbaImage;
+use wgpu::util::DeviceExt;
+
+/// The WGSL source of the fur shaders (entry points `vs_skin`, `fs_skin`, `vs_shell`, `vs_fin`,
+/// `fs_fur`).
+pub const SHADER_SOURCE: &str = include_str!("fur.wgsl");
+
+/// What can go wrong on the GPU.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter was found (on Debian: `apt-get install mesa-vulkan-drivers` gives lavapipe).
+    #[error(
+        "no Vulkan adapter found ({0}); install Mesa's software Vulkan driver (Debian: apt-get install mesa-vulkan-drivers) or a GPU driver"
+    )]
+    NoAdapter(String),
+    /// The device could not be created.
+    #[error("cannot create the GPU device: {0}")]
+    Device(String),
+    /// A shader, pipeline or draw was refused (validation error).
+    #[error("GPU validation: {0}")]
+    Validation(String),
+    /// The frame could not be read back.
+    #[error("GPU readback: {0}")]
+    Readback(String),
+    /// The scene has no mesh to draw or a size the GPU cannot take.
+    #[error("GPU: {0}")]
+    Scene(String),
+}
+
+/// Which adapter to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// The CPU (fallback) adapter, lavapipe: the same results on every machine.
+    #[default]
+    Software,
+    /// wgpu's default adapter (a hardware GPU where there is one).
+    Any,
+}
+
+/// Options of a GPU render.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// WGSL source replacing [`SHADER_SOURCE`] (tests change one term on purpose with it).
+    pub shader: Option<String>,
+}
+
+/// A wgpu device and queue, made once and reused for many frames.
+pub struct GpuContext {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    target_format: wgpu::TextureFormat,
+}
+
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+impl GpuContext {
+    /// Opens a Vulkan adapter (see [`AdapterChoice`]) and creates a device on it.
+    pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        let instance = wgpu::Instance::new(desc);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: choice == AdapterChoice::Software,
+            compatible_surface: None,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let blendable = adapter
+            .features()
+            .contains(wgpu::Features::FLOAT32_BLENDABLE);
+        let (features, target_format) = if blendable {
+            (
+                wgpu::Features::FLOAT32_BLENDABLE,
+                wgpu::TextureFormat::Rgba32Float,
+            )
+        } else {
+            (wgpu::Features::empty(), wgpu::TextureFormat::Rgba16Float)
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("pelage"),
+            required_features: features,
+            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+            target_format,
+        })
+    }
+
+    /// The adapter in use (name, driver, device type).
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.info
+    }
+
+    /// The colour target format (`Rgba32Float` when blendable, else `Rgba16Float`).
+    pub fn target_format(&self) -> wgpu::TextureFormat {
+        self.target_format
+    }
+
+    /// Draws `prepared` at `time` (seconds): the skin, the shells root to tip, the fins.
+    pub fn render(
+        &self,
+        prepared: &PreparedScene,
+        time: f32,
+        options: &GpuOptions,
+    ) -> Result<RgbaImage, GpuError> {
+        let guard = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = self.render_inner(prepared, time, options);
+        let scope = pollster::block_on(guard.pop());
+        if let Some(e) = scope {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        result
+    }
+
+    fn render_inner(
+        &self,
+        prepared: &PreparedScene,
+        time: f32,
+        options: &GpuOptions,
+    ) -> Result<RgbaImage, GpuError> {
+        let device = &self.device;
+        let s = prepared.scene();
+        let (width, height) = (s.image.width, s.image.height);
+        let mesh = prepared.mesh();
+        if mesh.vertices.is_empty() || mesh.indices.is_empty() {
+            return Err(GpuError::Scene("the mesh has no triangles".into()));
+        }
+        let source = options.shader.as_deref().unwrap_or(SHADER_SOURCE);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("fur.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+
+        // Group 0: frame uniforms, spots, matches.
+        let frame_bytes = frame_uniforms(prepared, time);
+        let frame_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame"),
+            contents: &frame_bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let shade = prepared.shade_params_at(time);
+        let spots = storage_floats(shade.spots.iter().flat_map(spot_vec4s));
+        let matches = storage_floats(
+            shade
+                .burn
+                .iter()
+                .flat_map(|b| b.matches.iter().map(|m| m.extend(0.0).to_array())),
+        );
+        let spot_buffer = self.storage(&spots, "spots");
+        let match_buffer = self.storage(&matches, "matches");
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("frame"),
+            entries: &[
+                layout_entry(0, buffer_binding(wgpu::BufferBindingType::Uniform)),
+                layout_entry(
+                    1,
+                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
+                layout_entry(
+                    2,
+                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
+            ],
+        });
+        let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("frame"),
+            layout: &frame_layout,
+            entries: &[
+                bind(0, &frame_buffer),
+                bind(1, &spot_buffer),
+                bind(2, &match_buffer),
+            ],
+        });
+
+        // Group 1: layer uniforms, colour map, tangent map, sampler.
+        let layer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("layer"),
+            entries: &[
+                layout_entry(0, buffer_binding(wgpu::BufferBindingType::Uniform)),
+                layout_entry(1, texture_binding()),
+                layout_entry(2, texture_binding()),
+                layout_entry(
+                    3,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+            ],
+        });
+        let sampler = |clamp_v: bool| {
+            device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("fur"),
+                address_mode_u: wgpu::AddressMode::Repeat,
+                address_mode_v: if clamp_v {
+                    wgpu::AddressMode::ClampToEdge
+                } else {
+                    wgpu::AddressMode::Repeat
+                },
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                ..Default::default()
+            })
+        };
+        let shell_sampler = sampler(false);
+        let fin_sampler = sampler(true);
+        let layer_group = |layer: [u32; 8],
+                           colour: &wgpu::TextureView,
+                           tangent: &wgpu::TextureView,
+                           sampler: &wgpu::Sampler| {
+            let bytes: Vec<u8> = layer.iter().flat_map(|v| v.to_le_bytes()).collect();
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("layer"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("layer"),
+                layout: &layer_layout,
+                entries: &[
+                    bind(0, &buffer),
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(colour),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(tangent),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Sampler(sampler),
+                    },
+                ],
+            })
+        };
+
+        let n = prepared.shell_count();
+        let mut shell_views = Vec::with_capacity(n);
+        for i in 0..n {
+            let (colour, tangent) = prepared.shell_textures(i).expect("layer in range");
+            shell_views.push((self.upload(colour), self.upload(tangent)));
+        }
+        let max_shell = s.fur.number_of_shells - 1;
+        let skin_group = layer_group(
+            [0, max_shell, 0, 0, 0, 0, 0, 0],
+            &shell_views[0].0,
+            &shell_views[0].1,
+            &shell_sampler,
+        );
+        let shell_groups: Vec<wgpu::BindGroup> = (0..n)
+            .map(|i| {
+                let p = prepared.shell_layer_params(i as u32);
+                layer_group(
+                    [
+                        p.index,
+                        p.max_shell,
+                        p.lookups,
+                        p.height_fraction.to_bits(),
+                        prepared.shell_offsets()[i].to_bits(),
+                        0,
+                        0,
+                        0,
+                    ],
+                    &shell_views[i].0,
+                    &shell_views[i].1,
+                    &shell_sampler,
+                )
+            })
+            .collect();
+
+        // Vertex data: the mesh (skin and shells), the fin quads of this frame.
+        let mesh_floats: Vec<f32> = mesh
+            .vertices
+            .iter()
+            .flat_map(|v| {
+                let mut out = Vec::with_capacity(23);
+                out.extend(v.position.to_array());
+                out.extend(v.normal.to_array());
+                out.extend(v.uv.to_array());
+                out.extend(v.frame.tangent.to_array());
+                out.extend(v.frame.binormal.to_array());
+                out.extend(v.frame.normal.to_array());
+                out.extend(v.dpdu.to_array());
+                out.extend(v.dpdv.to_array());
+                out
+            })
+            .collect();
+        let mesh_buffer = self.vertex_buffer(&mesh_floats, "mesh");
+        let index_buffer = self.index_buffer(&mesh.indices, "mesh indices");
+        let mesh_index_count = (mesh.indices.len() * 3) as u32;
+        let fin = match prepared.fin_textures() {
+            Some((colour, tangent)) => {
+                let (quads, triangles) = prepared.fin_quads_at(time);
+                if triangles.is_empty() {
+                    None
+                } else {
+                    let floats: Vec<f32> = quads
+                        .iter()
+                        .flat_map(|(p, f)| {
+                            let mut out = Vec::with_capacity(25);
+                            out.extend(p.to_array());
+                            out.extend(f.uv.to_array());
+                            out.extend(f.light.to_array());
+                            out.extend(f.eye.to_array());
+                            out.extend(f.shadow.to_array());
+                            out.push(f.fade);
+                            out.extend(f.object.to_array());
+                            out.extend(f.normal.to_array());
+                            out.extend(f.wind_uv.to_array());
+                            out.extend(f.wind.to_array());
+                            out
+                        })
+                        .collect();
+                    let (colour, tangent) = (self.upload(colour), self.upload(tangent));
+                    let group = layer_group(
+                        [max_shell, max_shell, 0, 1.0f32.to_bits(), 0, 1, 0, 0],
+                        &colour,
+                        &tangent,
+                        &fin_sampler,
+                    );
+                    Some((
+                        self.vertex_buffer(&floats, "fins"),
+                        self.index_buffer(&triangles, "fin indices"),
+                        (triangles.len() * 3) as u32,
+                        group,
+                    ))
+                }
+            }
+            None => None,
+        };
+
+        // Pipelines.
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("fur"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&layer_layout)],
+            immediate_size: 0,
+        });
+        let mesh_attributes = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x3,
+            4 => Float32x3, 5 => Float32x3, 6 => Float32x3, 7 => Float32x3
+        ];
+        let fin_attributes = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x2, 2 => Float32x3, 3 => Float32x3, 4 => Float32x2,
+            5 => Float32, 6 => Float32x3, 7 => Float32x3, 8 => Float32x2, 9 => Float32x3
+        ];
+        let mesh_vertex = wgpu::VertexBufferLayout {
+            array_stride: 23 * 4,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &mesh_attributes,
+        };
+        let fin_vertex = wgpu::VertexBufferLayout {
+            array_stride: 25 * 4,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &fin_attributes,
+        };
+        let alpha_blend = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::SrcAlpha,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+        };
+        let pipeline = |vs: &str,
+                        fs: &str,
+                        vertex: &wgpu::VertexBufferLayout,
+                        blend: Option<wgpu::BlendState>,
+                        depth_compare: wgpu::CompareFunction,
+                        depth_write: bool,
+                        cull: Option<wgpu::Face>| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(vs),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(vertex.clone())],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode: cull,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(depth_write),
+                    depth_compare: Some(depth_compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: self.target_format,
+                        blend,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let skin_pipeline = pipeline(
+            "vs_skin",
+            "fs_skin",
+            &mesh_vertex,
+            None,
+            wgpu::CompareFunction::Less,
+            true,
+            Some(wgpu::Face::Back),
+        );
+        let shell_pipeline = pipeline(
+            "vs_shell",
+            "fs_fur",
+            &mesh_vertex,
+            Some(alpha_blend),
+            wgpu::CompareFunction::LessEqual,
+            false,
+            Some(wgpu::Face::Back),
+        );
+        let fin_pipeline = pipeline(
+            "vs_fin",
+            "fs_fur",
+            &fin_vertex,
+            Some(alpha_blend),
+            wgpu::CompareFunction::LessEqual,
+            false,
+            None,
+        );
+
+        // Targets.
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let target = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("colour"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: self.target_format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let target_view = target.create_view(&Default::default());
+        let depth_view = depth.create_view(&Default::default());
+        let bg = s.image.background;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("fur"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: f64::from(bg.x),
+                            g: f64::from(bg.y),
+                            b: f64::from(bg.z),
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &frame_group, &[]);
+            pass.set_vertex_buffer(0, mesh_buffer.slice(..));
+            pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            // The skin: opaque, writes depth.
+            pass.set_pipeline(&skin_pipeline);
+            pass.set_bind_group(1, &skin_group, &[]);
+            pass.draw_indexed(0..mesh_index_count, 0, 0..1);
+            // Shells, root to tip (thesis 3.1.4).
+            pass.set_pipeline(&shell_pipeline);
+            for group in &shell_groups {
+                pass.set_bind_group(1, group, &[]);
+                pass.draw_indexed(0..mesh_index_count, 0, 0..1);
+            }
+            // Fins at the silhouette.
+            if let Some((vertices, indices, count, group)) = &fin {
+                pass.set_pipeline(&fin_pipeline);
+                pass.set_bind_group(1, group, &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..*count, 0, 0..1);
+            }
+        }
+        let texel_bytes = if self.target_format == wgpu::TextureFormat::Rgba32Float {
+            16
+        } else {
+            8
+        };
+        let row = (width * texel_bytes).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(row) * u64::from(height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &target,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(height),
+                },
+            },
+            size,
+        );
+        self.queue.submit([encoder.finish()]);
+        let slice = readback.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        receiver
+            .recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut rgba = Vec::with_capacity(width as usize * height as usize * 4);
+        for y in 0..height as usize {
+            let line = &data[y * row as usize..][..(width * texel_bytes) as usize];
+            if texel_bytes == 16 {
+                for c in line.chunks_exact(4) {
+                    rgba.push(to_unorm8(f32::from_le_bytes([c[0], c[1], c[2], c[3]])));
+                }
+            } else {
+                for c in line.chunks_exact(2) {
+                    rgba.push(to_unorm8(half_to_f32(u16::from_le_bytes([c[0], c[1]]))));
+                }
+            }
+        }
+        drop(data);
+        readback.unmap();
+        RgbaImage::from_raw(width, height, rgba)
+            .ok_or_else(|| GpuError::Readback("short image".into()))
+    }
+
+    fn storage(&self, floats: &[f32], label: &str) -> wgpu::Buffer {
+        let bytes: Vec<u8> = floats.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+    }
+
+    fn vertex_buffer(&self, floats: &[f32], label: &str) -> wgpu::Buffer {
+        let bytes: Vec<u8> = floats.iter().flat_map(|v| v.to_le_bytes()).collect();
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+    }
+
+    fn index_buffer(&self, triangles: &[[u32; 3]], label: &str) -> wgpu::Buffer {
+        let bytes: Vec<u8> = triangles
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::INDEX,
+            })
+    }
+
+    /// Uploads a texture with the oracle's own mip chain.
+    fn upload(&self, texture: &crate::raster::Texture) -> wgpu::TextureView {
+        let levels = texture.level_count() as u32;
+        let gpu = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("fur texture"),
+            size: wgpu::Extent3d {
+                width: texture.width(),
+                height: texture.height(),
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        for k in 0..levels {
+            let level = texture.level(k as usize).expect("level in range");
+            let bytes: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            self.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &gpu,
+                    mip_level: k,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(level.width * 4),
+                    rows_per_image: Some(level.height),
+                },
+                wgpu::Extent3d {
+                    width: level.width,
+                    height: level.height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+        gpu.create_view(&Default::default())
+    }
+}
+
+/// Draws `prepared` at `time` on a new [`GpuContext`] with the default (software) adapter.
+/// For many frames, make one context and call [`GpuContext::render`].
+pub fn render(prepared: &PreparedScene, time: f32) -> Result<RgbaImage, GpuError> {
+    GpuContext::new(AdapterChoice::default())?.render(prepared, time, &GpuOptions::default())
+}
+
+/// The oracle's output rule: `⌊255·clamp(c, 0, 1) + 0.5⌋`, NaN → 0.
+fn to_unorm8(c: f32) -> u8 {
+    if c > 0.0 {
+        (255.0 * c.min(1.0) + 0.5) as u8
+    } else {
+        0
+    }
+}
+
+/// IEEE half to f32 (the Rgba16Float fallback target).
+fn half_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exponent = i32::from((h >> 10) & 0x1f);
+    let mantissa = f32::from(h & 0x3ff);
+    sign * match exponent {
+        0 => mantissa * 2f32.powi(-24),
+        31 => {
+            if mantissa == 0.0 {
+                f32::INFINITY
+            } else {
+                f32::NAN
+            }
+        }
+        e => (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_binding(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+fn texture_binding() -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
+}
+
+fn bind(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+/// A storage array of vec4s; never empty (a zero vec4 when there is nothing).
+fn storage_floats(items: impl Iterator<Item = [f32; 4]>) -> Vec<f32> {
+    let mut out: Vec<f32> = items.flatten().collect();
+    if out.is_empty() {
+        out.extend([0.0; 4]);
+    }
+    out
+}
+
+/// A spot as four vec4s (the layout in `fur.wgsl`).
+fn spot_vec4s(spot: &Spot) -> [[f32; 4]; 4] {
+    match *spot {
+        Spot::Ellipsoid {
+            centre,
+            radii,
+            inner,
+            colour,
+        } => [
+            [0.0; 4],
+            centre.extend(0.0).to_array(),
+            radii.extend(inner).to_array(),
+            colour.extend(0.0).to_array(),
+        ],
+        Spot::Light {
+            direction,
+            exponent,
+            inner_threshold,
+            outer_threshold,
+            colour,
+            ..
+        } => [
+            [1.0, 0.0, 0.0, 0.0],
+            direction.extend(exponent).to_array(),
+            Vec3::ZERO.extend(inner_threshold).to_array(),
+            colour.extend(outer_threshold).to_array(),
+        ],
+        Spot::Stripe {
+            axis,
+            period,
+            width,
+            softness,
+            colour,
+        } => [
+            [2.0, 0.0, 0.0, 0.0],
+            axis.extend(period).to_array(),
+            Vec3::ZERO.extend(width).to_array(),
+            colour.extend(softness).to_array(),
+        ],
+    }
+}
+
+/// The `FrameUniforms` of `fur.wgsl`, bytes in field order.
+fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
+    let s = prepared.scene();
+    let camera = crate::export::camera(s);
+    let view_proj: Mat4 = camera.view_projection(s.image.width as f32 / s.image.height as f32);
+    let shade = prepared.shade_params_at(time);
+    let wind = s.wind.as_ref().map(|w| {
+        let params = crate::shading::WindParams {
+            direction: w.direction,
+            strength: w.strength,
+            frequency: w.frequency,
+            elasticity: w.elasticity,
+            max_bend: w.max_bend,
+        };
+        w.direction
+            .normalize_or_zero()
+            .extend(crate::shading::wind_force(time, &params))
+    });
+    let w = &shade.weights;
+    let (burn_exponent, burning) = match &shade.burn {
+        Some(b) => (b.exponent, 1.0),
+        None => (0.0, 0.0),
+    };
+    let floats: Vec<Vec4> = vec![
+        s.camera.eye.extend(1.0),
+        s.light.direction.normalize_or_zero().extend(0.0),
+        shade.light_colour.extend(0.0),
+        (s.fur.colour * 0.35).extend(0.0),
+        wind.unwrap_or(Vec4::ZERO),
+        Vec4::new(
+            s.fur.texture_repeat[0],
+            s.fur.texture_repeat[1],
+            s.fur.model_difference,
+            if wind.is_some() { 1.0 } else { 0.0 },
+        ),
+        Vec4::new(
+            shade.ambient,
+            shade.exponents.banks,
+            shade.exponents.specular,
+            shade.exponents.dampened,
+        ),
+        Vec4::new(
+            shade.tangent_shift,
+            shade.wind_tangent_fraction,
+            burn_exponent,
+            burning,
+        ),
+        Vec4::new(w.ambient, w.diffuse, w.specular, w.dampened),
+        Vec4::new(w.shadow, 0.0, 0.0, 0.0),
+    ];
+    let mut bytes: Vec<u8> = view_proj
+        .to_cols_array()
+        .iter()
+        .chain(
+            floats
+                .iter()
+                .flat_map(|v| v.to_array())
+                .collect::<Vec<_>>()
+                .iter(),
+        )
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let tangents: u32 = match shade.tangents {
+        crate::shading::SpecularTangents::One => 1,
+        crate::shading::SpecularTangents::Three => 3,
+    };
+    let debug: u32 = match shade.debug_view {
+        DebugView::None => 0,
+        DebugView::Tangents => 1,
+        DebugView::Alpha => 2,
+        DebugView::Shadow => 3,
+    };
+    let matches = shade.burn.as_ref().map_or(0, |b| b.matches.len()) as u32;
+    for v in [tangents, debug, shade.spots.len() as u32, matches] {
+        bytes.extend(v.to_le_bytes());
+    }
+    bytes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_decode() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0x3800), 0.5);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0), 0.0);
+    }
+
+    #[test]
+    fn output_rounding_is_the_oracles() {
+        assert_eq!(to_unorm8(1.0), 255);
+        assert_eq!(to_unorm8(0.5), 128);
+        assert_eq!(to_unorm8(-1.0), 0);
+        assert_eq!(to_unorm8(f32::NAN), 0);
+    }
+}

@@ -1,0 +1,234 @@
+//! The GPU backend against the oracle (feature `gpu`): every scene in `scenes/` drawn by both
+//! at a reduced size, a table of the comparison metrics, and a failure when a scene exceeds the
+//! tolerance documented in the README ("Checking a GPU renderer"). Then the proof that the
+//! comparison catches real bugs: one shader term changed on purpose must fail it.
+//!
+//! The adapter is the CPU one (Mesa's lavapipe; `.ci/run` installs it). Without any Vulkan
+//! adapter these tests fail with a message saying what to install.
+#![cfg(feature = "gpu")]
+
+use pelage::compare::{Comparison, Tolerance, compare_images};
+use pelage::gpu::{AdapterChoice, GpuContext, GpuOptions, SHADER_SOURCE};
+use pelage::render::PreparedScene;
+use pelage::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// The tolerance every scene must meet (README, "Tolerances"): at most 0.5% of pixels more
+/// than 8 steps off in some channel, FLIP mean at most 0.015 and its 99th percentile at most
+/// 0.15, PSNR at least 40 dB.
+const TOLERANCE: &str = "threshold=8,over=0.005,flip-mean=0.015,flip-p99=0.15,psnr=40";
+
+/// Longest image side in these tests (the oracle renders the same reduced size).
+const SIDE: u32 = 240;
+
+fn context() -> GpuContext {
+    GpuContext::new(AdapterChoice::Software).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn scenes() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("scenes/")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// The scene at a reduced size (aspect kept), and the instants to check.
+fn load(path: &Path) -> (Scene, Vec<f32>) {
+    let mut scene = Scene::load(path).expect("scene");
+    let (w, h) = (scene.image.width as f32, scene.image.height as f32);
+    let scale = SIDE as f32 / w.max(h);
+    scene.image.width = ((w * scale).round() as u32).max(2);
+    scene.image.height = ((h * scale).round() as u32).max(2);
+    let name = path.file_stem().expect("name").to_string_lossy();
+    // The animated scenes at instants of the golden tests (wind swaying, fur burning).
+    let times = match name.as_ref() {
+        "wind" => vec![0.5, 1.5],
+        "burn" => vec![3.0, 6.0],
+        _ => vec![scene.time],
+    };
+    (scene, times)
+}
+
+fn out_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gpu");
+    std::fs::create_dir_all(&dir).expect("out dir");
+    dir
+}
+
+fn compare(
+    context: &GpuContext,
+    prepared: &PreparedScene,
+    time: f32,
+    options: &GpuOptions,
+    tolerance: &Tolerance,
+    name: &str,
+) -> Comparison {
+    let oracle = prepared.render_at(time, 64).expect("oracle render");
+    let oracle = image::RgbaImage::from_raw(oracle.width, oracle.height, oracle.rgba8)
+        .expect("oracle image");
+    let gpu = context
+        .render(prepared, time, options)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let c = compare_images(&oracle, &gpu, tolerance).expect("same size");
+    let dir = out_dir();
+    oracle
+        .save(dir.join(format!("{name}-oracle.png")))
+        .expect("write");
+    gpu.save(dir.join(format!("{name}-gpu.png")))
+        .expect("write");
+    pelage::compare::heat_map(&oracle, &gpu)
+        .expect("same size")
+        .save(dir.join(format!("{name}-heat.png")))
+        .expect("write");
+    c
+}
+
+fn row(name: &str, c: &Comparison) -> String {
+    format!(
+        "{name:<18} {:>9.3}% {:>4} {:>4} {:>4} {:>8.4} {:>10} {:>8.4}% {:>8.5} {:>8.5} {:>8.5}  {}",
+        100.0 * c.exact_pixels as f64 / c.pixels as f64,
+        c.max_abs_error[0],
+        c.max_abs_error[1],
+        c.max_abs_error[2],
+        (c.mean_abs_error[0] + c.mean_abs_error[1] + c.mean_abs_error[2]) / 3.0,
+        c.psnr.to_string(),
+        100.0 * c.over_fraction(),
+        c.flip.mean,
+        c.flip.p99,
+        c.flip.max,
+        if c.passed() { "ok" } else { "FAIL" }
+    )
+}
+
+#[test]
+fn every_scene_matches_the_oracle_within_tolerance() {
+    let context = context();
+    let info = context.adapter_info();
+    let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
+    println!(
+        "adapter: {} ({:?}, {}), target {:?}; tolerance {tolerance}",
+        info.name,
+        info.device_type,
+        info.driver_info,
+        context.target_format()
+    );
+    println!(
+        "{:<18} {:>10} {:>4} {:>4} {:>4} {:>8} {:>10} {:>9} {:>8} {:>8} {:>8}",
+        "scene",
+        "exact",
+        "maxR",
+        "maxG",
+        "maxB",
+        "mean",
+        "PSNR",
+        ">thresh",
+        "FLIPmean",
+        "FLIPp99",
+        "FLIPmax"
+    );
+    let mut failures = Vec::new();
+    for path in scenes() {
+        let (scene, times) = load(&path);
+        let prepared = PreparedScene::new(&scene).expect("prepare");
+        let stem = path
+            .file_stem()
+            .expect("name")
+            .to_string_lossy()
+            .into_owned();
+        for &t in &times {
+            let name = if times.len() > 1 {
+                format!("{stem}@t{t}")
+            } else {
+                stem.clone()
+            };
+            let c = compare(
+                &context,
+                &prepared,
+                t,
+                &GpuOptions::default(),
+                &tolerance,
+                &name,
+            );
+            println!("{}", row(&name, &c));
+            if !c.passed() {
+                failures.push(format!("{name}: {}", c.failures.join("; ")));
+            }
+        }
+    }
+    println!("images and heat maps: {}", out_dir().display());
+    assert!(
+        failures.is_empty(),
+        "outside tolerance:\n{}",
+        failures.join("\n")
+    );
+}
+
+/// Replaces `from` (which must occur exactly once) in the shader.
+fn perturbed(from: &str, to: &str) -> GpuOptions {
+    assert_eq!(
+        SHADER_SOURCE.matches(from).count(),
+        1,
+        "the perturbation must change exactly one place: {from}"
+    );
+    GpuOptions {
+        shader: Some(SHADER_SOURCE.replace(from, to)),
+    }
+}
+
+fn check_caught(scene_file: &str, time: f32, options: GpuOptions, what: &str) {
+    let context = context();
+    let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
+    let (scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(scene_file));
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    let honest = compare(
+        &context,
+        &prepared,
+        time,
+        &GpuOptions::default(),
+        &tolerance,
+        "honest",
+    );
+    let bad = compare(&context, &prepared, time, &options, &tolerance, what);
+    println!("{}\n{}", row("unchanged shader", &honest), row(what, &bad));
+    assert!(
+        honest.passed(),
+        "the unchanged shader must pass: {:?}",
+        honest.failures
+    );
+    assert!(
+        !bad.passed(),
+        "{what}: the comparison did not catch the change"
+    );
+}
+
+#[test]
+fn a_changed_banks_exponent_is_caught() {
+    // Banks's exponent 4.8 → 4.6 in the diffuse term (eq. 2.5, thesis 3.2.3).
+    check_caught(
+        "scenes/torus.toml",
+        0.0,
+        perturbed(
+            "kajiya_kay_diffuse(tangent, light, s.y)",
+            "kajiya_kay_diffuse(tangent, light, s.y - 0.2)",
+        ),
+        "banks 4.6",
+    );
+}
+
+#[test]
+fn a_changed_burn_threshold_is_caught() {
+    // The burn threshold 0.1 → 0.15 (thesis 3.4).
+    check_caught(
+        "scenes/burn.toml",
+        6.0,
+        perturbed(
+            "const BURN_THRESHOLD: f32 = 0.1;",
+            "const BURN_THRESHOLD: f32 = 0.15;",
+        ),
+        "burn threshold 0.15",
+    );
+}
