@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 /// The tolerance every scene must meet (README, "Tolerances"): at most 0.5% of pixels more
 /// than 8 steps off in some channel, FLIP mean at most 0.015 and its 99th percentile at most
 /// 0.15, PSNR at least 40 dB.
-const TOLERANCE: &str = "threshold=8,over=0.005,flip-mean=0.015,flip-p99=0.15,psnr=40";
+const TOLERANCE: &str = pelage::compare::GPU_TOLERANCE;
 
 /// Longest image side in these tests (the oracle renders the same reduced size).
 const SIDE: u32 = 240;
@@ -231,4 +231,44 @@ fn a_changed_burn_threshold_is_caught() {
         ),
         "burn threshold 0.15",
     );
+}
+
+#[test]
+fn a_gpu_sweep_against_the_oracle_adds_the_metrics() {
+    let dir = out_dir().join("sweep");
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args([
+            "sweep",
+            "--backend",
+            "gpu",
+            "--against-oracle",
+            "--param",
+            "number_of_shells=8,16",
+            "--width",
+            "120",
+            "--height",
+            "90",
+            "--frames",
+            "1",
+            "-o",
+        ])
+        .arg(&dir)
+        .output()
+        .expect("pelage runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).expect("results.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let verdict = header
+        .iter()
+        .position(|h| *h == "oracle_within_tolerance")
+        .expect("the comparison's columns");
+    assert!(header.contains(&"oracle_flip_mean") && header.contains(&"oracle_psnr_db"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        assert_eq!(row[verdict], "true", "{row:?}");
+    }
+    assert!(dir.join("point_0001_diff.png").is_file());
 }

@@ -193,6 +193,29 @@ fn bad_parameters_are_refused_before_rendering() {
         "sweep",
         "--param",
         "number_of_shells=4",
+        "--against-oracle",
+        "-o",
+        dir.join("y").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--backend gpu"));
+    if !cfg!(feature = "gpu") {
+        let o = pelage(&[
+            "sweep",
+            "--param",
+            "number_of_shells=4",
+            "--backend",
+            "gpu",
+            "-o",
+            dir.join("z").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("feature"));
+    }
+    let o = pelage(&[
+        "sweep",
+        "--param",
+        "number_of_shells=4",
         "--shard",
         "4/3",
         "-o",

@@ -2,6 +2,7 @@
 //! baked, rendered `--frames` times and timed; the folder gets `point_NNNN.png` per point,
 //! `results.csv`, `contact_sheet.png` and `fps.png`. `pelage sweep-merge` joins shards.
 
+use super::render::Backend;
 use super::{CommonArgs, Failure, apply_overrides, progress, scene_source, with_threads};
 use clap::Args;
 use pelage::render::PreparedScene;
@@ -28,6 +29,16 @@ pub struct SweepArgs {
     /// Run only shard I of N (1-based): the points whose number is I − 1 modulo N.
     #[arg(long)]
     pub shard: Option<String>,
+    /// Which renderer draws and is timed: the CPU oracle, or wgpu (built with `--features gpu`).
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    pub backend: Backend,
+    /// With `--backend gpu`: also render every point with the oracle and add the comparison's
+    /// metrics to results.csv (and a heat map `point_NNNN_diff.png`).
+    #[arg(long)]
+    pub against_oracle: bool,
+    /// The tolerance `--against-oracle` judges by (see `pelage compare --tolerance`).
+    #[arg(long, default_value = pelage::compare::GPU_TOLERANCE)]
+    pub tolerance: String,
 }
 
 #[derive(Args)]
@@ -55,6 +66,14 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         .transpose()
         .map_err(bad)?;
     let points = sweep::sweep_points(&parameters).map_err(bad)?;
+    if args.against_oracle && args.backend != Backend::Gpu {
+        return Err(Failure::bad_input(
+            "--against-oracle compares the GPU backend with the oracle: add --backend gpu",
+        ));
+    }
+    let tolerance = pelage::compare::Tolerance::parse(&args.tolerance)
+        .map_err(|e| Failure::bad_input(format!("--tolerance: {e}")))?;
+    let renderer = Renderer::new(args.backend)?;
     let (text, name, base_dir) = scene_source(&args.common)?;
     // Every point is checked before any is rendered, so a bad value fails at once.
     let mut scenes = Vec::new();
@@ -70,6 +89,7 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
     let tile = args.common.tile;
     let frames = args.frames;
     let output = args.output.clone();
+    let against_oracle = args.against_oracle;
     let rows = with_threads(
         args.common.threads,
         || -> Result<Vec<ResultRow>, Failure> {
@@ -84,18 +104,38 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                 let mut last = None;
                 for _ in 0..frames {
                     let t = Instant::now();
-                    let image = prepared.render(tile)?;
+                    let image = renderer.render(&prepared, scene.time, tile)?;
                     times.push(t.elapsed().as_secs_f64() * 1e3);
                     last = Some(image);
                 }
-                let Some(image) = last else {
+                let Some((image, fragments_shaded)) = last else {
                     return Err(Failure::other("no frame was rendered"));
                 };
+                let mut extra = Vec::new();
+                if against_oracle {
+                    let oracle = prepared.render(tile)?;
+                    let oracle =
+                        image::RgbaImage::from_raw(oracle.width, oracle.height, oracle.rgba8)
+                            .ok_or_else(|| {
+                                Failure::other("the oracle's image has the wrong size")
+                            })?;
+                    let c = pelage::compare::compare_images(&oracle, &image, &tolerance)
+                        .map_err(|e| Failure::other(e.to_string()))?;
+                    extra = oracle_columns(&c);
+                    let heat = pelage::compare::heat_map(&oracle, &image)
+                        .map_err(|e| Failure::other(e.to_string()))?;
+                    super::write_png(
+                        &output.join(format!("point_{:04}_diff.png", point.index)),
+                        heat.width(),
+                        heat.height(),
+                        &heat,
+                    )?;
+                }
                 super::write_png(
                     &output.join(point_file(point.index)),
-                    image.width,
-                    image.height,
-                    &image.rgba8,
+                    image.width(),
+                    image.height(),
+                    &image,
                 )?;
                 times.sort_by(f64::total_cmp);
                 let median = times[times.len() / 2];
@@ -107,8 +147,8 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                     min_frame_ms: times[0],
                     max_frame_ms: times[times.len() - 1],
                     fps: 1e3 / median,
-                    fragments_shaded: image.stats.fragments_shaded,
-                    extra: Vec::new(),
+                    fragments_shaded,
+                    extra,
                 });
                 bar.inc(1);
             }
@@ -152,6 +192,85 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
         }
     }
     write_summary(&args.output, &names, &rows)
+}
+
+/// The metrics `--against-oracle` adds to a row.
+fn oracle_columns(c: &pelage::compare::Comparison) -> Vec<(String, String)> {
+    let max_rgb = c.max_abs_error[..3].iter().copied().max().unwrap_or(0);
+    [
+        (
+            "oracle_exact_pct",
+            format!(
+                "{:.3}",
+                100.0 * c.exact_pixels as f64 / c.pixels.max(1) as f64
+            ),
+        ),
+        ("oracle_max_error", max_rgb.to_string()),
+        (
+            "oracle_psnr_db",
+            if c.psnr.0.is_finite() {
+                format!("{:.2}", c.psnr.0)
+            } else {
+                "inf".into()
+            },
+        ),
+        (
+            "oracle_over_threshold_pct",
+            format!("{:.4}", 100.0 * c.over_fraction()),
+        ),
+        ("oracle_flip_mean", format!("{:.5}", c.flip.mean)),
+        ("oracle_flip_p99", format!("{:.5}", c.flip.p99)),
+        ("oracle_within_tolerance", c.passed().to_string()),
+    ]
+    .into_iter()
+    .map(|(n, v)| (n.to_string(), v))
+    .collect()
+}
+
+/// The renderer a sweep times: the oracle, or one GPU context for the whole sweep.
+enum Renderer {
+    Cpu,
+    #[cfg(feature = "gpu")]
+    Gpu(pelage::gpu::GpuContext),
+}
+
+impl Renderer {
+    fn new(backend: Backend) -> Result<Self, Failure> {
+        match backend {
+            Backend::Cpu => Ok(Renderer::Cpu),
+            #[cfg(feature = "gpu")]
+            Backend::Gpu => pelage::gpu::GpuContext::new(pelage::gpu::AdapterChoice::default())
+                .map(Renderer::Gpu)
+                .map_err(|e| Failure::other(e.to_string())),
+            #[cfg(not(feature = "gpu"))]
+            Backend::Gpu => Err(Failure::bad_input(
+                "--backend gpu: this pelage was built without the `gpu` feature (cargo build --release --features gpu)",
+            )),
+        }
+    }
+
+    /// One frame and the fragments the oracle shaded for it (0 on the GPU, which does not say).
+    fn render(
+        &self,
+        prepared: &PreparedScene,
+        time: f32,
+        tile: u32,
+    ) -> Result<(image::RgbaImage, u64), Failure> {
+        match self {
+            Renderer::Cpu => {
+                let image = prepared.render_at(time, tile)?;
+                let fragments = image.stats.fragments_shaded;
+                let rgba = image::RgbaImage::from_raw(image.width, image.height, image.rgba8)
+                    .ok_or_else(|| Failure::other("the rendered image has the wrong size"))?;
+                Ok((rgba, fragments))
+            }
+            #[cfg(feature = "gpu")]
+            Renderer::Gpu(context) => context
+                .render(prepared, time, &pelage::gpu::GpuOptions::default())
+                .map(|image| (image, 0))
+                .map_err(|e| Failure::other(e.to_string())),
+        }
+    }
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {

@@ -47,6 +47,10 @@ pub enum CompareError {
     Tolerance(String),
 }
 
+/// The documented tolerance of a correct GPU implementation against the oracle (README,
+/// "Tolerances"): what `tests/gpu.rs` and `pelage sweep --backend gpu --against-oracle` judge by.
+pub const GPU_TOLERANCE: &str = "threshold=8,over=0.005,flip-mean=0.015,flip-p99=0.15,psnr=40";
+
 /// The bounds a comparison must stay within. The default is exact equality.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Tolerance {
