@@ -231,7 +231,7 @@ fn oracle_columns(c: &pelage::compare::Comparison) -> Vec<(String, String)> {
 enum Renderer {
     Cpu,
     #[cfg(feature = "gpu")]
-    Gpu(pelage::gpu::GpuContext),
+    Gpu(Box<pelage::gpu::GpuContext>),
 }
 
 impl Renderer {
@@ -240,7 +240,7 @@ impl Renderer {
             Backend::Cpu => Ok(Renderer::Cpu),
             #[cfg(feature = "gpu")]
             Backend::Gpu => pelage::gpu::GpuContext::new(pelage::gpu::AdapterChoice::default())
-                .map(Renderer::Gpu)
+                .map(|c| Renderer::Gpu(Box::new(c)))
                 .map_err(|e| Failure::other(e.to_string())),
             #[cfg(not(feature = "gpu"))]
             Backend::Gpu => Err(Failure::bad_input(
