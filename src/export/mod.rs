@@ -328,16 +328,10 @@ fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Valu
     let aspect = s.image.width as f32 / s.image.height as f32;
     let shade = prepared.shade_params_at(time);
     let wind = s.wind.as_ref().map(|w| {
-        let params = crate::shading::WindParams {
-            direction: w.direction,
-            strength: w.strength,
-            frequency: w.frequency,
-            elasticity: w.elasticity,
-            max_bend: w.max_bend,
-        };
+        let (direction, force) = w.direction_and_force(time);
         json!({
-            "direction_unit": w.direction.normalize_or_zero(),
-            "force": crate::shading::wind_force(time, &params),
+            "direction_unit": direction,
+            "force": force,
             "tangent_fraction": w.tangent_fraction,
         })
     });

@@ -819,16 +819,8 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
     let view_proj: Mat4 = camera.view_projection(s.image.width as f32 / s.image.height as f32);
     let shade = prepared.shade_params_at(time);
     let wind = s.wind.as_ref().map(|w| {
-        let params = crate::shading::WindParams {
-            direction: w.direction,
-            strength: w.strength,
-            frequency: w.frequency,
-            elasticity: w.elasticity,
-            max_bend: w.max_bend,
-        };
-        w.direction
-            .normalize_or_zero()
-            .extend(crate::shading::wind_force(time, &params))
+        let (direction, force) = w.direction_and_force(time);
+        direction.extend(force)
     });
     let w = &shade.weights;
     let (burn_exponent, burning) = match &shade.burn {

@@ -278,19 +278,7 @@ impl PreparedScene {
         let repeat = Vec2::from(s.fur.texture_repeat);
         let shade = ShadeParams::from_scene(s, time);
         let shade = &shade;
-        let wind = s.wind.as_ref().map(|w| {
-            let params = crate::shading::WindParams {
-                direction: w.direction,
-                strength: w.strength,
-                frequency: w.frequency,
-                elasticity: w.elasticity,
-                max_bend: w.max_bend,
-            };
-            (
-                w.direction.normalize_or_zero(),
-                crate::shading::wind_force(time, &params),
-            )
-        });
+        let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
         let n = s.fur.number_of_shells;
         let max_shell = n - 1;
         let mut frame = Frame::new(&mut fb);
@@ -643,19 +631,7 @@ impl PreparedScene {
     /// vertex's object-space position with its fur varyings, and the triangles.
     pub fn fin_quads_at(&self, time: f32) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
         let s = &self.scene;
-        let wind = s.wind.as_ref().map(|w| {
-            let params = crate::shading::WindParams {
-                direction: w.direction,
-                strength: w.strength,
-                frequency: w.frequency,
-                elasticity: w.elasticity,
-                max_bend: w.max_bend,
-            };
-            (
-                w.direction.normalize_or_zero(),
-                crate::shading::wind_force(time, &params),
-            )
-        });
+        let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
         let shade = ShadeParams::from_scene(s, time);
         self.fin_geometry(
             s.camera.eye,

@@ -493,6 +493,27 @@ pub struct WindSettings {
     pub tangent_fraction: f32,
 }
 
+impl WindSettings {
+    /// The wind model's parameters (thesis 3.3).
+    pub fn params(&self) -> crate::shading::WindParams {
+        crate::shading::WindParams {
+            direction: self.direction,
+            strength: self.strength,
+            frequency: self.frequency,
+            elasticity: self.elasticity,
+            max_bend: self.max_bend,
+        }
+    }
+
+    /// The unit wind direction and the force at `time` (push and elastic return, thesis 3.3).
+    pub fn direction_and_force(&self, time: f32) -> (Vec3, f32) {
+        (
+            self.direction.normalize_or_zero(),
+            crate::shading::wind_force(time, &self.params()),
+        )
+    }
+}
+
 impl Default for WindSettings {
     fn default() -> Self {
         WindSettings {
