@@ -1,14 +1,17 @@
-//! The `pelage` command line: render scenes to PNG and benchmark them.
+//! The `pelage` command line: render scenes to PNG, benchmark them, view them in a window.
 //!
 //! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments), 1 on other failures
 //! (an output that cannot be written).
 
 mod cli;
+#[cfg(feature = "viewer")]
+mod view;
 
 use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
 use cli::render::RenderArgs;
+use cli::view::ViewArgs;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -29,6 +32,8 @@ enum Command {
     Render(RenderArgs),
     /// Time baking and frames of a scene.
     Bench(BenchArgs),
+    /// Show a scene in a window, moving: orbit, toggle effects, tune the fur (h: keys).
+    View(ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +55,7 @@ fn main() -> ExitCode {
     let result = match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::View(args) => cli::view::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

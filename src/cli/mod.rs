@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 pub mod bench;
 pub mod render;
+pub mod view;
 
 /// The arguments every scene-reading subcommand takes.
 #[derive(Args, Clone)]
