@@ -397,8 +397,13 @@ impl Viewer {
         let first = match &self.shown {
             Some(s) => {
                 let (w, h) = (s.frame.image.width, s.frame.image.height);
+                let rate = if fps > 0.0 {
+                    format!("{fps:.0} fps")
+                } else {
+                    "still".to_string()
+                };
                 format!(
-                    "{fps:.0} fps  {:.0} ms  1/{} {w}x{h}{}",
+                    "{rate}  {:.0} ms  1/{} {w}x{h}{}",
                     s.frame.ms,
                     s.frame.divisor,
                     if s.at.elapsed() < Duration::from_millis(300) && s.frame.step > 0 {
@@ -608,19 +613,36 @@ fn pack([r, g, b]: [u8; 3]) -> u32 {
     (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
 }
 
-/// Scales an RGBA8 image to fill `width` × `height` (nearest texel) as `0x00RRGGBB`.
+/// Per output coordinate: the two source coordinates around its centre and the weight of the
+/// second in 1/256 (bilinear, edges clamped).
+fn taps(out: usize, source: usize) -> Vec<(usize, usize, u32)> {
+    (0..out)
+        .map(|i| {
+            let x = ((i as f32 + 0.5) * source as f32 / out as f32 - 0.5).max(0.0);
+            let x0 = (x as usize).min(source - 1);
+            let weight = ((x - x0 as f32) * 256.0) as u32;
+            (x0, (x0 + 1).min(source - 1), weight.min(256))
+        })
+        .collect()
+}
+
+/// Scales an RGBA8 image to fill `width` × `height` as `0x00RRGGBB`: a copy at the same size,
+/// bilinear when the image is smaller (a reduced preview).
 fn scale_into(image: &pelage::render::RenderedImage, out: &mut [u32], width: usize, height: usize) {
     let (sw, sh) = (image.width as usize, image.height as usize);
-    if sw == 0 || sh == 0 {
+    if sw == 0 || sh == 0 || image.rgba8.len() < sw * sh * 4 {
         return;
     }
-    let columns: Vec<usize> = (0..width).map(|x| (x * sw / width).min(sw - 1)).collect();
-    for (y, row) in out.chunks_exact_mut(width).take(height).enumerate() {
-        let sy = (y * sh / height).min(sh - 1);
-        let source = &image.rgba8[sy * sw * 4..(sy + 1) * sw * 4];
-        for (px, &sx) in row.iter_mut().zip(&columns) {
-            let p = &source[sx * 4..sx * 4 + 3];
-            *px = pack([p[0], p[1], p[2]]);
+    let texel = |x: usize, y: usize, c: usize| u32::from(image.rgba8[(y * sw + x) * 4 + c]);
+    let (columns, rows) = (taps(width, sw), taps(height, sh));
+    for (row, &(y0, y1, wy)) in out.chunks_exact_mut(width).zip(&rows) {
+        for (px, &(x0, x1, wx)) in row.iter_mut().zip(&columns) {
+            let channel = |c: usize| {
+                let top = texel(x0, y0, c) * (256 - wx) + texel(x1, y0, c) * wx;
+                let bottom = texel(x0, y1, c) * (256 - wx) + texel(x1, y1, c) * wx;
+                ((top * (256 - wy) + bottom * wy + (1 << 15)) >> 16).min(255) as u8
+            };
+            *px = pack([channel(0), channel(1), channel(2)]);
         }
     }
 }
@@ -631,22 +653,45 @@ mod tests {
     use pelage::raster::RasterStats;
     use pelage::render::RenderedImage;
 
-    #[test]
-    fn scaling_repeats_each_texel_over_its_block() {
-        let image = RenderedImage {
-            width: 2,
-            height: 1,
-            rgba8: vec![255, 0, 0, 255, 0, 0, 255, 255],
+    fn image(width: u32, height: u32, rgba8: Vec<u8>) -> RenderedImage {
+        RenderedImage {
+            width,
+            height,
+            rgba8,
             stats: RasterStats::default(),
             warnings: Vec::new(),
-        };
-        let mut out = vec![0; 4 * 2];
-        scale_into(&image, &mut out, 4, 2);
-        assert_eq!(
-            out,
-            vec![
-                0xFF0000, 0xFF0000, 0xFF, 0xFF, 0xFF0000, 0xFF0000, 0xFF, 0xFF
-            ]
+        }
+    }
+
+    #[test]
+    fn same_size_frames_are_copied_exactly() {
+        let pixels: Vec<u8> = (0..3 * 2 * 4).map(|i| (i * 11) as u8).collect();
+        let mut out = vec![0; 6];
+        scale_into(&image(3, 2, pixels.clone()), &mut out, 3, 2);
+        for (i, px) in out.iter().enumerate() {
+            let p = &pixels[i * 4..];
+            assert_eq!(*px, pack([p[0], p[1], p[2]]));
+        }
+    }
+
+    #[test]
+    fn smaller_frames_are_scaled_up_bilinearly_with_clamped_edges() {
+        // Red then blue, scaled ×4 across: pure at the outer quarters, mixed between.
+        let mut out = vec![0; 8];
+        scale_into(
+            &image(2, 1, vec![255, 0, 0, 255, 0, 0, 255, 255]),
+            &mut out,
+            8,
+            1,
         );
+        assert_eq!(out[0], 0xFF0000);
+        assert_eq!(out[1], 0xFF0000);
+        assert_eq!(out[6], 0x0000FF);
+        assert_eq!(out[7], 0x0000FF);
+        let red = |px: u32| px >> 16;
+        assert!(
+            red(out[2]) > red(out[3]) && red(out[3]) > red(out[4]) && red(out[4]) > red(out[5])
+        );
+        assert_eq!(red(out[3]) + (out[3] & 0xFF), 255);
     }
 }
