@@ -240,7 +240,7 @@ impl Viewer {
                 }
             },
         };
-        let (bake, scene) = (Arc::clone(&shown.frame.bake), shown.frame.scene.clone());
+        let (bake, scene) = (Arc::clone(&shown.frame.bake), self.capture(&shown.frame));
         let (pool, tile, sender) = (
             Arc::clone(&self.refine_pool),
             self.options.tile,
@@ -256,6 +256,16 @@ impl Viewer {
         self.shots_in_flight += 1;
         self.say("writing the screenshot...");
         Ok(())
+    }
+
+    /// The scene a screenshot of `frame` writes: the frame's, with the clock's time where the
+    /// frame did not depend on it (no wind, no fire), so the file records the time on screen.
+    fn capture(&self, frame: &Frame) -> Scene {
+        let mut scene = frame.scene.clone();
+        if scene.wind.is_none() && scene.burn.is_none() {
+            scene.time = self.state.clock.now();
+        }
+        scene
     }
 
     /// Handles one event from the workers.
@@ -580,7 +590,7 @@ impl Viewer {
         if let (Some(path), Some(shown)) = (self.options.screenshot.clone(), &self.shown) {
             let message = worker::screenshot(
                 &shown.frame.bake,
-                &shown.frame.scene,
+                &self.capture(&shown.frame),
                 &self.refine_pool,
                 self.options.tile,
                 &path,

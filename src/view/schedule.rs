@@ -13,11 +13,11 @@ pub const SETTLE_MS: u128 = 250;
 /// The coarsest internal resolution: 1/16 of the window size.
 pub const MAX_DIVISOR: u32 = 16;
 /// A measured frame time is trusted for this many frames, then measured again.
-const MEMORY_FRAMES: u64 = 60;
+const MEMORY_FRAMES: u64 = 120;
 /// Without a recent measurement, the next finer size (four times the pixels) is guessed to
 /// take this many times as long: less than four, as part of a frame's cost does not depend on
 /// its size (vertices, binning, fins).
-const FINER_GUESS: f64 = 3.0;
+const FINER_GUESS: f64 = 2.0;
 
 /// The image size at 1/`divisor` of `width` × `height` (rounded up, at least 1×1).
 pub fn reduced_size(width: u32, height: u32, divisor: u32) -> (u32, u32) {
@@ -51,30 +51,37 @@ impl Pace {
         self.divisor
     }
 
-    /// Takes a frame drawn at 1/`divisor` in `ms` milliseconds into account: one step coarser
-    /// when it took over 1.5 budgets; one step finer when the finer size is expected within the
-    /// budget (its own recent time if there is one, else [`FINER_GUESS`] times this one). The
-    /// band between the two keeps steady frame times on one size.
+    /// Takes a frame drawn at 1/`divisor` in `ms` milliseconds into account, one step at a
+    /// time: coarser when it took over 1.5 budgets, or over one budget while the coarser size
+    /// recently kept within it; finer when the finer size is expected within the budget (its
+    /// own recent time if there is one, else [`FINER_GUESS`] times this one). A size found too
+    /// slow is tried again only after [`MEMORY_FRAMES`] frames, so steady frame times settle.
     pub fn observe(&mut self, divisor: u32, ms: f64) {
         if divisor != self.divisor || !ms.is_finite() {
             return;
         }
         self.frames += 1;
-        let slot = |d: u32| d.trailing_zeros() as usize;
         self.measured[slot(divisor)] = Some((ms, self.frames));
-        if ms > 1.5 * FRAME_BUDGET_MS && self.divisor < MAX_DIVISOR {
+        let recent = |d: u32| {
+            self.measured[slot(d)]
+                .filter(|&(_, at)| self.frames - at < MEMORY_FRAMES)
+                .map(|(m, _)| m)
+        };
+        let coarser_fits = recent(divisor * 2).is_some_and(|m| m <= FRAME_BUDGET_MS);
+        if divisor < MAX_DIVISOR
+            && (ms > 1.5 * FRAME_BUDGET_MS || ms > FRAME_BUDGET_MS && coarser_fits)
+        {
             self.divisor *= 2;
-        } else if self.divisor > 1 {
-            let finer = self.divisor / 2;
-            let expected = match self.measured[slot(finer)] {
-                Some((m, at)) if self.frames - at < MEMORY_FRAMES => m,
-                _ => ms * FINER_GUESS,
-            };
-            if expected <= FRAME_BUDGET_MS {
-                self.divisor = finer;
-            }
+        } else if divisor > 1 && recent(divisor / 2).unwrap_or(ms * FINER_GUESS) <= FRAME_BUDGET_MS
+        {
+            self.divisor /= 2;
         }
     }
+}
+
+/// Index of a divisor (1, 2, 4, 8, 16) in [`Pace`]'s measurements.
+fn slot(divisor: u32) -> usize {
+    (divisor.trailing_zeros() as usize).min(4)
 }
 
 /// The refinement steps after a frame at 1/`shown`: each halving of the divisor down to 1.
@@ -125,13 +132,13 @@ mod tests {
     #[test]
     fn a_size_measured_too_slow_is_not_retried_until_its_time_is_old() {
         let mut pace = Pace::default();
-        pace.observe(8, 20.0); // 1/4 guessed at 60 ms: try it
+        pace.observe(8, 20.0); // 1/4 guessed at 40 ms: try it
         assert_eq!(pace.divisor(), 4);
-        pace.observe(4, 120.0); // too slow: back to 1/8
+        pace.observe(4, 80.0); // over budget while 1/8 fits: back
         assert_eq!(pace.divisor(), 8);
         for _ in 0..MEMORY_FRAMES - 1 {
             pace.observe(8, 20.0);
-            assert_eq!(pace.divisor(), 8, "1/4 took 120 ms a moment ago");
+            assert_eq!(pace.divisor(), 8, "1/4 took 80 ms a moment ago");
         }
         pace.observe(8, 20.0);
         assert_eq!(
@@ -156,8 +163,8 @@ mod tests {
             seen.push(pace.divisor());
         }
         assert!(seen[10..].iter().all(|&d| d == seen[39]), "{seen:?}");
-        assert!(cost(seen[39]) <= FRAME_BUDGET_MS);
-        assert!(cost(seen[39] / 2) > FRAME_BUDGET_MS);
+        assert_eq!(seen[39], 4, "{seen:?}");
+        assert!(cost(4) <= FRAME_BUDGET_MS && cost(2) > FRAME_BUDGET_MS);
     }
 
     #[test]
