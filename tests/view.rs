@@ -6,7 +6,7 @@
 use glam::Vec3;
 use pelage::render::PreparedScene;
 use pelage::scene::{BurnSettings, DebugView, Scene, SpotKind, SpotSettings, WindSettings};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A small, quick scene: everything the viewer toggles is cheap to draw here.
 const SMALL: &str = r#"
@@ -30,13 +30,6 @@ texture_repeat = [12.0, 5.0]
 
 fn small() -> Scene {
     Scene::parse(SMALL, "small", Path::new(".")).expect("small scene")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("view-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
 }
 
 #[test]
@@ -97,7 +90,15 @@ fn render_with_other_draw_settings_equals_a_fresh_bake_of_them() {
 #[cfg(feature = "viewer")]
 mod window {
     use super::*;
+    use std::path::PathBuf;
     use std::process::{Command, Output};
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("view-{name}"));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch dir");
+        dir
+    }
 
     fn pelage(args: &[&str], display: Option<&str>) -> Output {
         let mut command = Command::new(env!("CARGO_BIN_EXE_pelage"));

@@ -270,6 +270,47 @@ pub fn screenshot(
 mod tests {
     use super::*;
 
+    const OCTAHEDRON: &str = "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+        vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n\
+        f 1/1 3/2 5/3\nf 3/1 2/2 5/4\nf 2/1 4/2 5/3\nf 4/1 1/2 5/4\n\
+        f 3/1 1/2 6/3\nf 2/1 3/2 6/4\nf 4/1 2/2 6/3\nf 1/1 4/2 6/4\n";
+
+    #[test]
+    fn a_screenshot_of_an_obj_scene_loads_from_another_folder_and_matches() {
+        let root = std::env::temp_dir().join(format!("pelage-view-obj-{}", std::process::id()));
+        let (models, shots) = (root.join("models"), root.join("shots"));
+        std::fs::create_dir_all(&models).expect("dir");
+        std::fs::create_dir_all(&shots).expect("dir");
+        std::fs::write(models.join("octahedron.obj"), OCTAHEDRON).expect("obj");
+        let text = "[image]\nwidth = 48\nheight = 32\n[camera]\neye = [0.0, 1.0, 4.0]\n\
+            [mesh]\nkind = \"obj\"\npath = \"octahedron.obj\"\n\
+            [fur]\nnumber_of_strands = 50\nnumber_of_shells = 3\ntexture_resolution = 16\n\
+            model_difference = 0.2\n";
+        let scene = Scene::parse(text, "octahedron", &models).expect("scene");
+        let bake = Bake {
+            prepared: PreparedScene::new(&scene).expect("bake"),
+            generation: 1,
+        };
+        let mut settings = scene.clone();
+        settings.camera.eye = glam::Vec3::new(3.0, 2.0, 2.0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .expect("pool");
+        let png = shots.join("shot.png");
+        screenshot(&bake, &settings, &pool, 16, &png).expect("screenshot");
+        let written = Scene::load(&scene_path(&png)).expect("the written scene loads");
+        let path = written.mesh.path.clone().expect("mesh path");
+        assert!(path.is_absolute(), "{}", path.display());
+        let fresh = PreparedScene::new(&written)
+            .expect("bake from the written scene")
+            .render(64)
+            .expect("render");
+        let saved = image::open(&png).expect("png").to_rgba8();
+        assert!(saved.as_raw() == &fresh.rgba8);
+        std::fs::remove_dir_all(&root).expect("cleanup");
+    }
+
     #[test]
     fn the_scene_goes_beside_the_png() {
         assert_eq!(
