@@ -1,9 +1,12 @@
-//! The `pelage` command line: render scenes to PNG, benchmark them, sweep their parameters.
+//! The `pelage` command line: render scenes to PNG, benchmark them, sweep their parameters,
+//! compare and export for GPU implementations, view them in a window.
 //!
 //! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments), 1 on other failures
 //! (an output that cannot be written).
 
 mod cli;
+#[cfg(feature = "viewer")]
+mod view;
 
 use clap::{Parser, Subcommand};
 use cli::CommonArgs;
@@ -12,6 +15,7 @@ use cli::compare::CompareArgs;
 use cli::export::ExportArgs;
 use cli::render::RenderArgs;
 use cli::sweep::{MergeArgs, SweepArgs};
+use cli::view::ViewArgs;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -40,6 +44,8 @@ enum Command {
     Compare(CompareArgs),
     /// Export textures, meshes, parameters and the oracle's render for a GPU implementation.
     Export(ExportArgs),
+    /// Show a scene in a window, moving: orbit, toggle effects, tune the fur (h: keys).
+    View(ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +72,7 @@ fn main() -> ExitCode {
         Command::SweepMerge(args) => cli::sweep::merge(args),
         Command::Compare(args) => cli::compare::run(args),
         Command::Export(args) => cli::export::run(args),
+        Command::View(args) => cli::view::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -13,6 +13,7 @@ pub mod export;
 pub mod gpu_render;
 pub mod render;
 pub mod sweep;
+pub mod view;
 
 /// The arguments every scene-reading subcommand takes.
 #[derive(Args, Clone)]

@@ -262,7 +262,11 @@ impl PreparedScene {
     /// Draws one frame at `time` (seconds) with the given tile size. Frame `k` of an animation
     /// at `fps` frames per second is `render_at(k as f32 / fps as f32, …)`.
     pub fn render_at(&self, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
-        let s = &self.scene;
+        self.draw(&self.scene, time, tile_size)
+    }
+
+    /// One frame of `s`, whose seed, mesh and fur are those of the bake (see [`Self::render_with`]).
+    fn draw(&self, s: &Scene, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
         let camera = Camera {
@@ -639,5 +643,33 @@ impl PreparedScene {
             wind,
             &shade,
         )
+    }
+}
+
+impl PreparedScene {
+    /// `settings` with this bake's seed, mesh, fur and base folder: the scene that
+    /// [`Self::render_with`] draws, which [`PreparedScene::new`] would bake to the same textures.
+    pub fn with_draw_settings(&self, settings: &Scene) -> Scene {
+        Scene {
+            seed: self.scene.seed,
+            mesh: self.scene.mesh.clone(),
+            fur: self.scene.fur.clone(),
+            base_dir: self.scene.base_dir.clone(),
+            ..settings.clone()
+        }
+    }
+
+    /// Draws this bake with another scene's draw-time settings (image size, camera, shading,
+    /// light, spots, stripes, wind, burn) at `time`, without baking again; `settings`' seed,
+    /// mesh and fur are ignored. The image is byte-identical to
+    /// `PreparedScene::new(&self.with_draw_settings(settings))?.render_at(time, tile_size)`: an
+    /// interactive viewer moves the camera or toggles effects on one bake.
+    pub fn render_with(
+        &self,
+        settings: &Scene,
+        time: f32,
+        tile_size: u32,
+    ) -> Result<RenderedImage, RenderError> {
+        self.draw(&self.with_draw_settings(settings), time, tile_size)
     }
 }

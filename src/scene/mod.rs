@@ -7,7 +7,7 @@
 mod validate;
 
 use glam::Vec3;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 pub use validate::Limits;
@@ -30,7 +30,7 @@ pub struct SceneError {
 }
 
 /// A whole scene.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Scene {
     /// Every random choice derives from this seed.
@@ -83,7 +83,7 @@ impl Default for Scene {
 }
 
 /// `[image]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImageSettings {
     /// Width in pixels.
@@ -105,7 +105,7 @@ impl Default for ImageSettings {
 }
 
 /// `[camera]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraSettings {
     /// Eye position.
@@ -154,7 +154,7 @@ impl CameraSettings {
 }
 
 /// Which object carries the fur.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum MeshKind {
     /// The thesis's main object.
@@ -171,7 +171,7 @@ pub enum MeshKind {
 }
 
 /// `[mesh]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MeshSettings {
     /// The object.
@@ -208,7 +208,7 @@ impl Default for MeshSettings {
 }
 
 /// How shells are spaced between the skin and `model_difference`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum ShellSpacingSetting {
     /// Equal steps.
@@ -219,7 +219,7 @@ pub enum ShellSpacingSetting {
 }
 
 /// `[fur]`: names follow the thesis (chapter 4.1).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FurSettings {
     /// Strands in one texture tile (`numberOfStrands`, base 1000).
@@ -295,7 +295,7 @@ impl Default for FurSettings {
 }
 
 /// Debug views replacing the shaded colour.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum DebugView {
     /// Normal shading.
@@ -310,7 +310,7 @@ pub enum DebugView {
 }
 
 /// Term weights of eq. 3.7.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WeightSettings {
     /// Ambient weight.
@@ -338,7 +338,7 @@ impl Default for WeightSettings {
 }
 
 /// `[shading]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShadingSettings {
     /// Ambient level (ψ_ambient = ambient · strandColour).
@@ -378,7 +378,7 @@ impl Default for ShadingSettings {
 }
 
 /// `[light]`
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LightSettings {
     /// Direction towards the light (normalised on use).
@@ -397,7 +397,7 @@ impl Default for LightSettings {
 }
 
 /// How a spot decides where it is (thesis 3.2.4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum SpotKind {
     /// Inside an ellipsoid in object space.
@@ -408,7 +408,7 @@ pub enum SpotKind {
 }
 
 /// `[[spots]]`: one spot. The inner part takes the full spot colour, a ring blends back to the fur.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SpotSettings {
     /// Geometric (ellipsoid) or light-based.
@@ -448,7 +448,7 @@ impl Default for SpotSettings {
 }
 
 /// `[[stripes]]`: periodic bands along an object-space axis.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StripeSettings {
     /// Stripe colour.
@@ -476,7 +476,7 @@ impl Default for StripeSettings {
 }
 
 /// `[wind]` (thesis 3.3).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WindSettings {
     /// Direction the wind blows towards.
@@ -529,7 +529,7 @@ impl Default for WindSettings {
 
 /// `[burn]` (thesis 3.4): matches are spot lights fixed to the object; their exponent follows a
 /// schedule, so the burnt area appears at `start` and then spreads.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BurnSettings {
     /// Direction of each match from the object's centre (object space).
@@ -601,4 +601,65 @@ impl Scene {
 
 fn line_of_offset(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+impl Scene {
+    /// The scene as TOML text that [`Scene::parse`] reads back to an equal scene: every `f32` is
+    /// written with enough digits to come back bit for bit, absent wind and burn are left out,
+    /// and `base_dir` is not written (a relative OBJ path stays relative to wherever the text is
+    /// saved: make it absolute first if the file goes elsewhere).
+    pub fn to_toml(&self) -> Result<String, String> {
+        toml::to_string(self).map_err(|e| format!("cannot write the scene as TOML: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod serialise_tests {
+    use super::*;
+
+    fn round_trip(scene: &Scene) -> Scene {
+        let text = scene.to_toml().expect("serialise");
+        Scene::parse(&text, "round-trip", &scene.base_dir).unwrap_or_else(|e| panic!("{e}\n{text}"))
+    }
+
+    #[test]
+    fn every_scene_file_round_trips() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        for entry in std::fs::read_dir(&dir).expect("scenes/") {
+            let path = entry.expect("entry").path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let scene = Scene::load(&path).expect("load");
+                assert_eq!(round_trip(&scene), scene, "{}", path.display());
+            }
+        }
+    }
+
+    #[test]
+    fn awkward_floats_and_every_table_round_trip_bit_for_bit() {
+        let mut scene = Scene::embedded_default().expect("default");
+        scene.time = 1.0 / 3.0;
+        scene.camera.eye = Vec3::new(0.1, -1.0e-7, 13.999_999);
+        scene.camera.target = Vec3::new(f32::MIN_POSITIVE, 2.0 / 3.0, -0.6);
+        scene.fur.model_difference = f32::from_bits(0.6f32.to_bits() + 1);
+        scene.wind = Some(WindSettings::default());
+        scene.burn = Some(BurnSettings {
+            start: 0.1 + 0.2,
+            ..BurnSettings::default()
+        });
+        scene.spots = vec![
+            SpotSettings::default(),
+            SpotSettings {
+                kind: SpotKind::Light,
+                ..SpotSettings::default()
+            },
+        ];
+        scene.stripes = vec![StripeSettings::default()];
+        scene.shading.debug_view = DebugView::Shadow;
+        scene.mesh.kind = MeshKind::Obj;
+        scene.mesh.path = Some(PathBuf::from("meshes/thing.obj"));
+        let back = round_trip(&scene);
+        assert_eq!(back, scene);
+        assert_eq!(back.camera.eye.y.to_bits(), scene.camera.eye.y.to_bits());
+        assert_eq!(back.time.to_bits(), scene.time.to_bits());
+    }
 }

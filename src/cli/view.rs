@@ -1,0 +1,70 @@
+//! `pelage view`: the interactive window (feature `viewer`, on by default).
+
+use super::{CommonArgs, Failure, load_scene};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Run this many frames and exit (for automated checks): the clock steps 1/fps per frame,
+    /// every frame is drawn before the next, and the frame rate is printed on stderr.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: Option<u32>,
+    /// Where the screenshot goes: written after the last of --frames, or by the `p` key
+    /// (default pelage-view-NNN.png). The scene drawn is written beside it as .toml.
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    /// Frames per second of the clock with --frames.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// Start with the clock stopped (space starts it).
+    #[arg(long)]
+    pub paused: bool,
+    /// With --frames, orbit the camera by this many degrees per frame.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub orbit: f32,
+}
+
+#[cfg(feature = "viewer")]
+pub fn run(args: ViewArgs) -> Result<(), Failure> {
+    let scene = load_scene(&args.common)?;
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
+        return Err(Failure::bad_input(format!(
+            "--fps {} must be in (0, 1000]",
+            args.fps
+        )));
+    }
+    if !args.orbit.is_finite() {
+        return Err(Failure::bad_input(
+            "--orbit must be a finite number of degrees",
+        ));
+    }
+    let name = match &args.common.scene {
+        Some(p) => p.display().to_string(),
+        None => pelage::scene::DEFAULT_SCENE_NAME.to_string(),
+    };
+    crate::view::run(
+        scene,
+        crate::view::Options {
+            title: format!("pelage view: {name}"),
+            threads: args.common.threads,
+            tile: args.common.tile,
+            frames: args.frames,
+            screenshot: args.screenshot,
+            fps: args.fps,
+            paused: args.paused,
+            orbit_deg: args.orbit,
+        },
+    )
+}
+
+#[cfg(not(feature = "viewer"))]
+pub fn run(args: ViewArgs) -> Result<(), Failure> {
+    load_scene(&args.common)?;
+    Err(Failure::other(
+        "this pelage was built without the viewer: rebuild with the cargo feature `viewer` \
+         (on by default)",
+    ))
+}
