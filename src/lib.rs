@@ -12,6 +12,7 @@
 
 pub mod camera;
 pub mod fur;
+pub mod limits;
 pub mod mesh;
 pub mod output;
 pub mod raster;

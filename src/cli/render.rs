@@ -1,10 +1,20 @@
 //! `pelage render`: one instant to a PNG, or an animation to numbered PNGs and a GIF.
+//!
+//! Outputs never look complete when they are not: a PNG or GIF is written to a temporary
+//! sibling and renamed; an animation's frames are written into a temporary sibling folder
+//! (`.NAME.PID.tmp`) that is renamed to the output folder only once every frame is written (an
+//! existing output folder that holds nothing but `frame_NNNN.png` files, a previous render, is
+//! replaced; any other existing folder is refused before rendering starts). On an error the
+//! temporary folder is removed; an interrupted process leaves at most a hidden `.tmp` folder.
 
-use super::{CommonArgs, Failure, load_scene, progress, spinner, with_threads, write_png};
+use super::{
+    CommonArgs, Failure, check_limits, load_scene, progress, render_failure, scene_name, spinner,
+    with_threads, write_png,
+};
 use clap::Args;
 use pelage::render::PreparedScene;
 use pelage::scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -15,10 +25,10 @@ pub struct RenderArgs {
     pub output: PathBuf,
     /// Render an animation of N frames: frame k is the instant k / fps, written as
     /// OUTPUT/frame_0000.png, frame_0001.png, ...
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=i64::from(pelage::limits::MAX_FRAMES)))]
     pub frames: Option<u32>,
     /// Frames per second of the animation.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 10.0)]
     pub fps: f32,
     /// Also write the animation as an animated GIF to this path.
     #[arg(long, requires = "frames")]
@@ -31,17 +41,159 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     if let Some(frames) = args.frames {
         return render_animation(&scene, &args, frames, tile);
     }
+    check_output_file(&args.output)?;
+    let name = scene_name(&args.common);
     let image = with_threads(args.common.threads, || {
+        check_limits(&scene, &args.common, 1, false)?;
         let bar = spinner("baking fur textures");
-        let prepared = PreparedScene::new(&scene)?;
+        let prepared = PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))?;
         bar.set_message("rendering");
-        let image = prepared.render(tile);
+        let image = prepared
+            .render(tile)
+            .map_err(|e| render_failure(e, &scene, &name));
         bar.finish_and_clear();
         image
     })??;
     write_png(&args.output, image.width, image.height, &image.rgba8)?;
     for warning in &image.warnings {
         eprintln!("warning: {warning}");
+    }
+    Ok(())
+}
+
+/// Refuses an output path that cannot take a file, before any work: a folder, or a file in a
+/// folder that does not exist.
+fn check_output_file(path: &Path) -> Result<(), Failure> {
+    if path.is_dir() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: is a folder (a PNG file name is expected; use --frames for a folder)",
+            path.display()
+        )));
+    }
+    if path.file_name().is_none() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: not a file name",
+            path.display()
+        )));
+    }
+    let parent = parent_of(path);
+    if !parent.is_dir() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: the folder {} does not exist",
+            path.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
+}
+
+fn parent_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Whether `name` is a frame file this command writes: `frame_` digits `.png`.
+fn is_frame_file(name: &str) -> bool {
+    name.strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".png"))
+        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// A frame folder being written: frames go to a hidden temporary sibling, renamed to the
+/// output at [`FrameFolder::commit`]; dropped without a commit, it removes itself.
+struct FrameFolder {
+    target: PathBuf,
+    temporary: PathBuf,
+    committed: bool,
+}
+
+impl FrameFolder {
+    /// Checks the output folder can be (re)placed and creates the temporary folder.
+    fn create(target: &Path) -> Result<FrameFolder, Failure> {
+        let other = |m: String| Failure::other(format!("{}: {m}", target.display()));
+        let name = target
+            .file_name()
+            .ok_or_else(|| {
+                Failure::bad_input(format!("-o {}: not a folder name", target.display()))
+            })?
+            .to_string_lossy()
+            .into_owned();
+        if target.exists() {
+            replaceable(target)?;
+        }
+        let parent = parent_of(target);
+        std::fs::create_dir_all(parent).map_err(|e| {
+            other(format!(
+                "cannot create the folder {}: {e}",
+                parent.display()
+            ))
+        })?;
+        let temporary = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+        if temporary.exists() {
+            let _ = std::fs::remove_dir_all(&temporary);
+        }
+        std::fs::create_dir(&temporary)
+            .map_err(|e| other(format!("cannot create the frame folder: {e}")))?;
+        Ok(FrameFolder {
+            target: target.to_path_buf(),
+            temporary,
+            committed: false,
+        })
+    }
+
+    fn path(&self) -> &Path {
+        &self.temporary
+    }
+
+    /// Moves the finished frames into place (replacing a previous render's frames).
+    fn commit(mut self) -> Result<(), Failure> {
+        let other = |m: String| Failure::other(format!("{}: {m}", self.target.display()));
+        let old = self.temporary.with_extension("old");
+        if self.target.exists() {
+            replaceable(&self.target)?;
+            std::fs::rename(&self.target, &old)
+                .map_err(|e| other(format!("cannot move the previous frames aside: {e}")))?;
+        }
+        std::fs::rename(&self.temporary, &self.target)
+            .map_err(|e| other(format!("cannot move the frames into place: {e}")))?;
+        self.committed = true;
+        if old.exists() {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for FrameFolder {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.temporary);
+        }
+    }
+}
+
+/// An existing output folder may be replaced only when it holds nothing but frame files.
+fn replaceable(target: &Path) -> Result<(), Failure> {
+    let refuse = |why: String| {
+        Failure::bad_input(format!(
+            "-o {}: {why}; choose a new folder or remove it",
+            target.display()
+        ))
+    };
+    if !target.is_dir() {
+        return Err(refuse("exists and is not a folder".into()));
+    }
+    let entries = std::fs::read_dir(target).map_err(|e| refuse(format!("cannot be read ({e})")))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| refuse(format!("cannot be read ({e})")))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !is_frame_file(&name) {
+            return Err(refuse(format!(
+                "holds {name:?}, which is not a frame of a previous render"
+            )));
+        }
     }
     Ok(())
 }
@@ -59,22 +211,29 @@ fn render_animation(
             args.fps
         )));
     }
-    std::fs::create_dir_all(&args.output).map_err(|e| {
-        Failure::other(format!(
-            "{}: cannot create the frame folder: {e}",
-            args.output.display()
-        ))
-    })?;
+    if let Some(gif) = &args.animation {
+        check_output_file(gif).map_err(|f| Failure {
+            message: f.message.replacen("-o ", "--animation ", 1),
+            ..f
+        })?;
+    }
     let fps = args.fps;
-    let dir = args.output.clone();
     let keep_for_gif = args.animation.is_some();
+    let name = scene_name(&args.common);
+    with_threads(args.common.threads, || {
+        check_limits(scene, &args.common, frames, keep_for_gif)
+    })??;
+    let folder = FrameFolder::create(&args.output)?;
+    let dir = folder.path().to_path_buf();
     let (images, warnings) = with_threads(args.common.threads, || -> Result<_, Failure> {
-        let prepared = PreparedScene::new(scene)?;
+        let prepared = PreparedScene::new(scene).map_err(|e| render_failure(e, scene, &name))?;
         let bar = progress(u64::from(frames));
         let mut kept = Vec::new();
         let mut warnings = Vec::new();
         for k in 0..frames {
-            let image = prepared.render_at(k as f32 / fps, tile)?;
+            let image = prepared
+                .render_at(k as f32 / fps, tile)
+                .map_err(|e| render_failure(e, scene, &name))?;
             write_png(
                 &dir.join(format!("frame_{k:04}.png")),
                 image.width,
@@ -90,6 +249,7 @@ fn render_animation(
         bar.finish_and_clear();
         Ok((kept, warnings))
     })??;
+    folder.commit()?;
     for warning in &warnings {
         eprintln!("warning: {warning}");
     }
