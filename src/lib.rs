@@ -17,5 +17,6 @@ pub mod mesh;
 pub mod output;
 pub mod raster;
 pub mod render;
+pub mod robust;
 pub mod scene;
 pub mod shading;

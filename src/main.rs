@@ -1,7 +1,7 @@
 //! The `pelage` command line: render scenes to PNG and benchmark them.
 //!
-//! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments), 1 on other failures
-//! (an output that cannot be written).
+//! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments, a scene over a resource
+//! limit), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
 
 mod cli;
 

@@ -22,7 +22,7 @@ use glam::{Vec2, Vec3};
 
 pub use fins::{Edge, FinWindows, edges, is_silhouette, silhouette_edges};
 pub use frame::{TangentFrame, face_tangents};
-pub use obj::{LoadedMesh, ObjSummary, load_obj, scan_obj};
+pub use obj::{LoadedMesh, ObjSummary, load_obj, load_obj_bytes, scan_obj};
 pub use procedural::{
     cylinder, cylinder_segments, leg, leg_segments, sphere, sphere_segments, torus, torus_segments,
 };

@@ -54,6 +54,23 @@ pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
         path: path.to_path_buf(),
         source,
     })?;
+    load_checked(path, &mut BufReader::new(file), summary.warnings)
+}
+
+/// Loads OBJ text held in memory, as [`load_obj`] loads a file; `name` names it in errors.
+/// Material libraries are not looked up (a warning says so). The entry point of the OBJ fuzz
+/// target and of the property tests.
+pub fn load_obj_bytes(bytes: &[u8], name: &Path) -> Result<LoadedMesh, MeshError> {
+    let summary = scan_obj_reader(name, bytes, None)?;
+    load_checked(name, &mut &bytes[..], summary.warnings)
+}
+
+/// tobj over text that [`scan_obj_reader`] accepted, then the merge into one [`Mesh`].
+fn load_checked(
+    path: &Path,
+    reader: &mut impl std::io::BufRead,
+    warnings: Vec<String>,
+) -> Result<LoadedMesh, MeshError> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -63,19 +80,17 @@ pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
     // Materials are not used and were checked by the scan: tobj gets an empty library.
     let no_materials = |_: &Path| -> tobj::MTLLoadResult { Ok((Vec::new(), Default::default())) };
     let (models, _materials) =
-        tobj::load_obj_buf(&mut BufReader::new(file), &options, no_materials).map_err(
-            |source| match source {
-                tobj::LoadError::ReadError => MeshError::Io {
-                    path: path.to_path_buf(),
-                    source: std::io::Error::other("read error"),
-                },
-                source => MeshError::Parse {
-                    path: path.to_path_buf(),
-                    source,
-                },
+        tobj::load_obj_buf(reader, &options, no_materials).map_err(|source| match source {
+            tobj::LoadError::ReadError => MeshError::Io {
+                path: path.to_path_buf(),
+                source: std::io::Error::other("read error"),
             },
-        )?;
-    let mut warnings = summary.warnings;
+            source => MeshError::Parse {
+                path: path.to_path_buf(),
+                source,
+            },
+        })?;
+    let mut warnings = warnings;
 
     let mut positions: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
@@ -246,7 +261,7 @@ fn open_checked(path: &Path, max_bytes: u64, what: &'static str) -> Result<File,
 /// endings stripped). Errors on a line that is not UTF-8 or longer than [`MAX_LINE_BYTES`].
 fn for_each_line(
     path: &Path,
-    file: File,
+    file: impl std::io::Read,
     mut each: impl FnMut(usize, &str) -> Result<(), LineError>,
 ) -> Result<(), MeshError> {
     use std::io::{BufRead, Read};
@@ -349,6 +364,16 @@ fn face_index(field: &str, count: u64, kind: &str, corner: &str) -> Result<Optio
 /// a missing one is a warning.
 pub fn scan_obj(path: &Path) -> Result<ObjSummary, MeshError> {
     let file = open_checked(path, crate::limits::MAX_OBJ_BYTES, "file size in bytes")?;
+    scan_obj_reader(path, file, Some(path.parent().unwrap_or(Path::new(""))))
+}
+
+/// [`scan_obj`] over any reader; material libraries are looked up in `library_dir` (not at
+/// all when `None`: a warning says they were not read).
+pub fn scan_obj_reader(
+    path: &Path,
+    file: impl std::io::Read,
+    library_dir: Option<&Path>,
+) -> Result<ObjSummary, MeshError> {
     let mut s = ObjSummary::default();
     // Largest positive index of each kind, with its line, checked against the totals at the end
     // (forward references are allowed, as tobj allows them).
@@ -496,7 +521,15 @@ pub fn scan_obj(path: &Path) -> Result<ObjSummary, MeshError> {
             path: path.to_path_buf(),
         });
     }
-    let dir = path.parent().unwrap_or(Path::new(""));
+    let Some(dir) = library_dir else {
+        if let Some((line, name)) = libraries.first() {
+            s.warnings.push(format!(
+                "{}:{line}: material library {name} not read; materials are not used",
+                path.display()
+            ));
+        }
+        return Ok(s);
+    };
     for (line, name) in libraries {
         let mtl = dir.join(&name);
         if !mtl.exists() {
