@@ -153,3 +153,19 @@ fn same_degenerate_scene_same_bytes() {
     assert_eq!(a, b);
     assert!(Path::new(&dir()).exists());
 }
+
+#[test]
+fn extreme_but_valid_parameters() {
+    // Every effect at the edge of its range: vanishing spot radii and stripe period, zero
+    // exponents and thresholds, the strongest wind at a distant instant, a match direction of
+    // length 1e-18, a burn schedule of zero length.
+    let text = "time = 1e6\n\
+        [image]\nwidth = 48\nheight = 36\n\
+        [fur]\nnumber_of_strands = 60\nnumber_of_shells = 4\ntexture_resolution = 16\n\
+        [[spots]]\nradii = [1e-38, 1e-38, 1e-38]\n\
+        [[spots]]\nkind = \"light\"\nexponent = 0.0\ninner_threshold = 0.0\nouter_threshold = 0.0\n\
+        [[stripes]]\nperiod = 1e-6\nwidth = 0.0\nsoftness = 0.0\n\
+        [wind]\nstrength = 10.0\nfrequency = 100.0\nelasticity = 0.0\nmax_bend = 1.0\n\
+        [burn]\nmatches = [[1e-18, 0, 0]]\nhigh_exponent = 0.0\nlow_exponent = 0.0\nspread_duration = 0.0\n";
+    render("extreme", text);
+}

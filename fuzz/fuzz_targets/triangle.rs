@@ -9,7 +9,14 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 53 {
         return;
     }
-    let f = |i: usize| f32::from_le_bytes([data[4 * i], data[4 * i + 1], data[4 * i + 2], data[4 * i + 3]]);
+    let f = |i: usize| {
+        f32::from_le_bytes([
+            data[4 * i],
+            data[4 * i + 1],
+            data[4 * i + 2],
+            data[4 * i + 3],
+        ])
+    };
     let v = |k: usize| Vec4::new(f(4 * k), f(4 * k + 1), f(4 * k + 2), f(4 * k + 3));
     let width = u32::from(u16::from_le_bytes([data[48], data[49]]));
     let height = u32::from(u16::from_le_bytes([data[50], data[51]]));

@@ -106,12 +106,14 @@ fn is_frame_file(name: &str) -> bool {
 struct FrameFolder {
     target: PathBuf,
     temporary: PathBuf,
+    /// A file the output folder may also hold (the GIF, when it is written inside).
+    also: Option<String>,
     committed: bool,
 }
 
 impl FrameFolder {
     /// Checks the output folder can be (re)placed and creates the temporary folder.
-    fn create(target: &Path) -> Result<FrameFolder, Failure> {
+    fn create(target: &Path, also: Option<&str>) -> Result<FrameFolder, Failure> {
         let other = |m: String| Failure::other(format!("{}: {m}", target.display()));
         let name = target
             .file_name()
@@ -121,7 +123,7 @@ impl FrameFolder {
             .to_string_lossy()
             .into_owned();
         if target.exists() {
-            replaceable(target)?;
+            replaceable(target, also)?;
         }
         let parent = parent_of(target);
         std::fs::create_dir_all(parent).map_err(|e| {
@@ -139,6 +141,7 @@ impl FrameFolder {
         Ok(FrameFolder {
             target: target.to_path_buf(),
             temporary,
+            also: also.map(str::to_string),
             committed: false,
         })
     }
@@ -152,7 +155,7 @@ impl FrameFolder {
         let other = |m: String| Failure::other(format!("{}: {m}", self.target.display()));
         let old = self.temporary.with_extension("old");
         if self.target.exists() {
-            replaceable(&self.target)?;
+            replaceable(&self.target, self.also.as_deref())?;
             std::fs::rename(&self.target, &old)
                 .map_err(|e| other(format!("cannot move the previous frames aside: {e}")))?;
         }
@@ -174,8 +177,9 @@ impl Drop for FrameFolder {
     }
 }
 
-/// An existing output folder may be replaced only when it holds nothing but frame files.
-fn replaceable(target: &Path) -> Result<(), Failure> {
+/// An existing output folder may be replaced only when it holds nothing but frame files (and
+/// `also`, the GIF of a previous render written inside it).
+fn replaceable(target: &Path, also: Option<&str>) -> Result<(), Failure> {
     let refuse = |why: String| {
         Failure::bad_input(format!(
             "-o {}: {why}; choose a new folder or remove it",
@@ -189,7 +193,7 @@ fn replaceable(target: &Path) -> Result<(), Failure> {
     for entry in entries {
         let entry = entry.map_err(|e| refuse(format!("cannot be read ({e})")))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if !is_frame_file(&name) {
+        if !is_frame_file(&name) && Some(name.as_str()) != also {
             return Err(refuse(format!(
                 "holds {name:?}, which is not a frame of a previous render"
             )));
@@ -211,19 +215,29 @@ fn render_animation(
             args.fps
         )));
     }
-    if let Some(gif) = &args.animation {
+    // The GIF may go inside the frame folder, which exists only once the frames are written.
+    let gif_inside = args
+        .animation
+        .as_deref()
+        .filter(|gif| parent_of(gif) == args.output.as_path());
+    if let Some(gif) = &args.animation
+        && gif_inside.is_none()
+    {
         check_output_file(gif).map_err(|f| Failure {
             message: f.message.replacen("-o ", "--animation ", 1),
             ..f
         })?;
     }
+    let keep_name = gif_inside
+        .and_then(|g| g.file_name())
+        .map(|n| n.to_string_lossy().into_owned());
     let fps = args.fps;
     let keep_for_gif = args.animation.is_some();
     let name = scene_name(&args.common);
     with_threads(args.common.threads, || {
         check_limits(scene, &args.common, frames, keep_for_gif)
     })??;
-    let folder = FrameFolder::create(&args.output)?;
+    let folder = FrameFolder::create(&args.output, keep_name.as_deref())?;
     let dir = folder.path().to_path_buf();
     let (images, warnings) = with_threads(args.common.threads, || -> Result<_, Failure> {
         let prepared = PreparedScene::new(scene).map_err(|e| render_failure(e, scene, &name))?;

@@ -147,11 +147,12 @@ pub fn snap(position: glam::Vec4, width: u32, height: u32) -> (Subpixel, f32, f3
 }
 
 /// Whether a clip-space position is one [`super::clip::clip_triangle`] can emit: finite, in
-/// front of the eye, and inside the guard band (with a margin of one for rounding).
+/// front of the eye with a finite `1/w` (not a subnormal `w`), and inside the guard band (with
+/// a margin of one for rounding).
 #[inline]
 pub fn within_guard_band(p: glam::Vec4) -> bool {
     let band = (super::clip::GUARD_BAND + 1.0) * p.w;
-    p.is_finite() && p.w > 0.0 && p.x.abs() <= band && p.y.abs() <= band
+    p.is_finite() && p.w > 0.0 && (1.0 / p.w).is_finite() && p.x.abs() <= band && p.y.abs() <= band
 }
 
 /// Sets up one clipped triangle for a `width`×`height` viewport. Returns `None` for
