@@ -8,8 +8,9 @@
 //!
 //! Invariants: a vertex with a NaN or infinite coordinate drops its whole triangle; no output
 //! vertex has `w < W_MIN` beyond rounding (and none has `w ≤ 0`: a polygon whose cut vertices
-//! lose all precision, from coordinates near `f32::MAX`, is dropped); an edge shared by two triangles is cut at bit-identical points, because
-//! the intersection is always computed from the inside endpoint towards the outside one.
+//! lose all precision, from coordinates near `f32::MAX`, is dropped); an edge shared by two
+//! triangles is cut at bit-identical points, because the intersection is always computed from
+//! the inside endpoint towards the outside one.
 
 use super::varyings::Varyings;
 use glam::Vec4;
