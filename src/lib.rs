@@ -16,10 +16,12 @@ pub mod export;
 pub mod fur;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod limits;
 pub mod mesh;
 pub mod output;
 pub mod raster;
 pub mod render;
+pub mod robust;
 pub mod scene;
 pub mod shading;
 pub mod sweep;

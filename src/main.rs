@@ -1,8 +1,8 @@
 //! The `pelage` command line: render scenes to PNG, benchmark them, sweep their parameters,
 //! compare and export for GPU implementations, view them in a window.
 //!
-//! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments), 1 on other failures
-//! (an output that cannot be written).
+//! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments, a scene over a resource
+//! limit), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
 
 mod cli;
 #[cfg(feature = "viewer")]
@@ -48,24 +48,39 @@ enum Command {
     View(ViewArgs),
 }
 
+/// Exit status of an internal error (a panic: a bug in pelage, never bad input).
+const EXIT_BUG: u8 = 101;
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Last line of defence: a panic prints one line, no backtrace, and exits 101. Bad input
+    // never gets here; it is answered with its own message and exit status 2.
+    std::panic::set_hook(Box::new(|info| {
+        let message = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        let location = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        let message = message.lines().next().unwrap_or("").to_string();
+        eprintln!("error: internal error (a bug in pelage, please report it): {message}{location}");
+    }));
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return argument_error(e),
+    };
     let command = cli.command.unwrap_or(Command::Render(RenderArgs {
-        common: CommonArgs {
-            scene: None,
-            width: None,
-            height: None,
-            threads: None,
-            tile: pelage::raster::DEFAULT_TILE_SIZE,
-            time: None,
-        },
+        common: CommonArgs::defaults(),
         output: PathBuf::from("pelage.png"),
         frames: None,
         fps: 10.0,
         animation: None,
         backend: cli::render::Backend::Cpu,
     }));
-    let result = match command {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command {
         Command::Render(args) => cli::render::run(args),
         Command::Bench(args) => cli::bench::run(args),
         Command::Sweep(args) => cli::sweep::run(args),
@@ -73,12 +88,45 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::run(args),
         Command::Export(args) => cli::export::run(args),
         Command::View(args) => cli::view::run(args),
-    };
+    }));
     match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(f) => {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(f)) => {
             eprintln!("error: {}", f.message);
             ExitCode::from(f.status)
+        }
+        Err(_) => ExitCode::from(EXIT_BUG),
+    }
+}
+
+/// Help and version go to stdout as clap prints them; a bad argument is one line on stderr
+/// (clap's first line, which names the argument) and exit status 2.
+fn argument_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp
+        | ErrorKind::DisplayVersion
+        | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = e.print();
+            ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2))
+        }
+        _ => {
+            // clap's message without its usage and tips, on one line.
+            let rendered = e.render().to_string();
+            let message: Vec<&str> = rendered
+                .lines()
+                .map(str::trim)
+                .take_while(|l| {
+                    !(l.starts_with("Usage:")
+                        || l.starts_with("tip:")
+                        || l.starts_with("For more information"))
+                })
+                .filter(|l| !l.is_empty())
+                .collect();
+            let message = message.join(" ");
+            let message = message.strip_prefix("error: ").unwrap_or(&message);
+            eprintln!("error: {message} (see pelage --help)");
+            ExitCode::from(2)
         }
     }
 }

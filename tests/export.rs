@@ -141,3 +141,44 @@ fn export_holds_everything_and_the_json_gives_the_scene_back() {
         .expect("count");
     assert_eq!(vertices as usize, prepared.mesh().vertices.len());
 }
+
+fn export_to(dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(["export", "--width", "48", "--height", "36", "-o"])
+        .arg(dir)
+        .output()
+        .expect("pelage runs")
+}
+
+/// The export folder is written whole or not at all: a previous export is replaced, a folder
+/// holding anything else is refused before work starts (and left as it was), and no temporary
+/// folder is left behind.
+#[test]
+fn export_replaces_a_previous_export_and_refuses_foreign_folders() {
+    let dir = scratch("staged");
+    let o = export_to(&dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = export_to(&dir);
+    assert!(
+        o.status.success(),
+        "re-export: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(dir.join("oracle.png").is_file() && dir.join("scene.json").is_file());
+
+    std::fs::write(dir.join("notes.txt"), "mine").expect("write");
+    let o = export_to(&dir);
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("notes.txt"), "{stderr}");
+    assert_eq!(std::fs::read(dir.join("notes.txt")).expect("kept"), b"mine");
+
+    let parent = dir.parent().expect("parent");
+    let leftovers: Vec<_> = std::fs::read_dir(parent)
+        .expect("list")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".export-staged"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}

@@ -1,6 +1,9 @@
 //! `pelage bench`: bake time and frame times of a scene.
 
-use super::{CommonArgs, Failure, load_scene, progress, with_threads};
+use super::{
+    CommonArgs, Failure, check_limits, load_scene, progress, render_failure, scene_name,
+    with_threads,
+};
 use clap::Args;
 use pelage::render::PreparedScene;
 use std::time::Instant;
@@ -22,15 +25,19 @@ pub fn run(args: BenchArgs) -> Result<(), Failure> {
     let tile = args.common.tile;
     let threads = args.common.threads;
     let report = with_threads(threads, || -> Result<String, Failure> {
+        check_limits(&scene, &args.common, 1, false)?;
+        let name = scene_name(&args.common);
         let start = Instant::now();
-        let prepared = PreparedScene::new(&scene)?;
+        let prepared = PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))?;
         let bake_ms = start.elapsed().as_secs_f64() * 1e3;
         let bar = progress(u64::from(args.frames));
         let mut times = Vec::with_capacity(args.frames as usize);
         let mut fragments = 0;
         for _ in 0..args.frames {
             let t = Instant::now();
-            let image = prepared.render(tile)?;
+            let image = prepared
+                .render(tile)
+                .map_err(|e| render_failure(e, &scene, &name))?;
             times.push(t.elapsed().as_secs_f64() * 1e3);
             fragments = image.stats.fragments_shaded;
             bar.inc(1);

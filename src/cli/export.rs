@@ -1,6 +1,8 @@
 //! `pelage export SCENE -o DIR/`: everything a GPU implementation needs to draw the same frame
-//! (textures, meshes, parameters, the oracle's render); see [`pelage::export`].
+//! (textures, meshes, parameters, the oracle's render); see [`pelage::export`]. The folder is
+//! written whole or not at all ([`StagedFolder`]).
 
+use super::staged::{EntryRule, StagedFolder};
 use super::{CommonArgs, Failure, load_scene, spinner, with_threads};
 use clap::Args;
 use pelage::export::{ExportError, export};
@@ -11,14 +13,15 @@ use std::path::PathBuf;
 pub struct ExportArgs {
     #[command(flatten)]
     pub common: CommonArgs,
-    /// The folder to write (created if missing).
+    /// The folder to write: created, or replaced when it holds a previous export only.
     #[arg(short, long)]
     pub output: PathBuf,
 }
 
 pub fn run(args: ExportArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
-    let dir = args.output.clone();
+    let folder = StagedFolder::create(&args.output, export_folder_entries())?;
+    let dir = folder.path().to_path_buf();
     let summary = with_threads(args.common.threads, || {
         let bar = spinner("baking fur textures");
         let prepared = PreparedScene::new(&scene).map_err(Failure::from)?;
@@ -30,10 +33,21 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
         bar.finish_and_clear();
         result
     })??;
+    folder.commit()?;
     println!(
         "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/)",
         args.output.display(),
         summary.files.len()
     );
     Ok(())
+}
+
+/// What a previous export holds at its top level.
+fn export_folder_entries() -> EntryRule {
+    EntryRule {
+        accepts: Box::new(|name: &str| {
+            matches!(name, "scene.json" | "oracle.png" | "meshes" | "textures")
+        }),
+        what: "part of a previous export",
+    }
 }

@@ -12,6 +12,7 @@ pub mod compare;
 pub mod export;
 pub mod gpu_render;
 pub mod render;
+pub mod staged;
 pub mod sweep;
 pub mod view;
 
@@ -21,20 +22,57 @@ pub struct CommonArgs {
     /// Scene file (TOML). Without one, the embedded default scene (thesis figure 3.1).
     pub scene: Option<PathBuf>,
     /// Override the image width.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Override the image height.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=256))]
     pub threads: Option<u32>,
     /// Tile size in pixels, even, 2..=1024 (default 64). The image does not depend on it.
-    #[arg(long, default_value_t = pelage::raster::DEFAULT_TILE_SIZE)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = pelage::raster::DEFAULT_TILE_SIZE)]
     pub tile: u32,
     /// Render this instant (seconds) instead of the scene's `time`.
     #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f32>,
+    /// Refuse renders whose memory estimate exceeds this size (8G, 512M, bytes; default 8G).
+    #[arg(long, value_name = "SIZE", allow_negative_numbers = true, value_parser = parse_size)]
+    pub max_memory: Option<u64>,
+    /// Refuse scenes whose fur bake would take more than this many texel writes and segment
+    /// tests (default 2e10, about a minute of baking on one core).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_work)]
+    pub max_work: Option<u64>,
+}
+
+impl CommonArgs {
+    /// The arguments of a plain render of the embedded default scene.
+    pub fn defaults() -> Self {
+        CommonArgs {
+            scene: None,
+            width: None,
+            height: None,
+            threads: None,
+            tile: pelage::raster::DEFAULT_TILE_SIZE,
+            time: None,
+            max_memory: None,
+            max_work: None,
+        }
+    }
+}
+
+fn parse_size(text: &str) -> Result<u64, String> {
+    pelage::limits::parse_bytes(text)
+}
+
+fn parse_work(text: &str) -> Result<u64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number (e.g. 5e10)"))?;
+    if !(value.is_finite() && value >= 1.0) {
+        return Err(format!("{text:?} must be a number of at least 1"));
+    }
+    Ok(value.min(u64::MAX as f64) as u64)
 }
 
 /// A failure and its exit status.
@@ -71,6 +109,37 @@ impl From<RenderError> for Failure {
             status,
         }
     }
+}
+
+/// The name errors use for the scene of `args`.
+pub fn scene_name(args: &CommonArgs) -> String {
+    match &args.scene {
+        Some(path) => path.display().to_string(),
+        None => pelage::scene::DEFAULT_SCENE_NAME.to_string(),
+    }
+}
+
+/// A failure of preparing or drawing `scene`, named after the scene file when the error does
+/// not name a file of its own (mesh errors name the OBJ file).
+pub fn render_failure(e: RenderError, scene: &Scene, name: &str) -> Failure {
+    use pelage::fur::FurError;
+    let status = if e.is_bad_input() { 2 } else { 1 };
+    let message = match &e {
+        RenderError::Mesh(_) => e.to_string(),
+        RenderError::Fur(FurError::InvalidParameter {
+            name: "max_height" | "min_height",
+            ..
+        }) => format!(
+            "{name}: fur.model_difference = {} is out of proportion to the mesh: strands must \
+             be at most {} fur tiles long (a tile is the mesh's uv extent / \
+             fur.texture_repeat), and not vanishingly short; change mesh.scale, \
+             fur.texture_repeat or fur.model_difference",
+            scene.fur.model_difference,
+            pelage::fur::MAX_LENGTH
+        ),
+        _ => format!("{name}: {e}"),
+    };
+    Failure { message, status }
 }
 
 /// The scene named on the command line (or the embedded default), with the overrides applied
@@ -126,6 +195,39 @@ pub fn apply_overrides(scene: &mut Scene, args: &CommonArgs, name: &str) -> Resu
         .revalidate(name)
         .map_err(|e| bad(format!("{e} (after --width/--height/--time)")))?;
     pelage::raster::TileGrid::new(1, 1, args.tile).map_err(|e| bad(format!("--tile: {e}")))?;
+    Ok(())
+}
+
+/// Checks the scene against the memory and bake-work limits (see `pelage::limits`) before
+/// anything large is allocated. `frames` are rendered; `keep_frames` when all are held for a
+/// GIF. An OBJ mesh is scanned here, so its malformed lines are reported before any work.
+pub fn check_limits(
+    scene: &Scene,
+    args: &CommonArgs,
+    frames: u32,
+    keep_frames: bool,
+) -> Result<(), Failure> {
+    use pelage::limits;
+    let name = scene_name(args);
+    let mesh = limits::mesh_size(scene).map_err(|e| Failure::bad_input(e.to_string()))?;
+    let threads = match args.threads {
+        Some(n) => n,
+        None => u32::try_from(rayon::current_num_threads()).unwrap_or(u32::MAX),
+    };
+    let work = limits::Workload {
+        frames,
+        keep_frames,
+        threads,
+    };
+    let max_memory = args.max_memory.unwrap_or(limits::DEFAULT_MAX_MEMORY);
+    let max_work = args.max_work.unwrap_or(limits::DEFAULT_MAX_BAKE_WORK);
+    limits::check(scene, mesh, &work, max_memory, max_work).map_err(|e| {
+        let flag = match e {
+            limits::LimitError::Memory { .. } => "--max-memory",
+            limits::LimitError::BakeWork { .. } => "--max-work",
+        };
+        Failure::bad_input(format!("{name}: {e}; raise the limit with {flag}"))
+    })?;
     Ok(())
 }
 

@@ -1,10 +1,18 @@
 //! `pelage render`: one instant to a PNG, or an animation to numbered PNGs and a GIF.
+//!
+//! Outputs never look complete when they are not: a PNG or GIF is written to a temporary
+//! sibling and renamed; an animation's frames go to a [`StagedFolder`] (an existing output
+//! folder that holds nothing but `frame_NNNN.png` files, a previous render, is replaced).
 
-use super::{CommonArgs, Failure, load_scene, progress, spinner, with_threads, write_png};
+use super::staged::{EntryRule, StagedFolder, parent_of};
+use super::{
+    CommonArgs, Failure, check_limits, load_scene, progress, render_failure, scene_name, spinner,
+    with_threads, write_png,
+};
 use clap::Args;
 use pelage::render::PreparedScene;
 use pelage::scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -15,10 +23,10 @@ pub struct RenderArgs {
     pub output: PathBuf,
     /// Render an animation of N frames: frame k is the instant k / fps, written as
     /// OUTPUT/frame_0000.png, frame_0001.png, ...
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=i64::from(pelage::limits::MAX_FRAMES)))]
     pub frames: Option<u32>,
     /// Frames per second of the animation.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 10.0)]
     pub fps: f32,
     /// Also write the animation as an animated GIF to this path.
     #[arg(long, requires = "frames")]
@@ -46,11 +54,16 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     if let Some(frames) = args.frames {
         return render_animation(&scene, &args, frames, tile);
     }
+    check_output_file(&args.output)?;
+    let name = scene_name(&args.common);
     let image = with_threads(args.common.threads, || {
+        check_limits(&scene, &args.common, 1, false)?;
         let bar = spinner("baking fur textures");
-        let prepared = PreparedScene::new(&scene)?;
+        let prepared = PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))?;
         bar.set_message("rendering");
-        let image = prepared.render(tile);
+        let image = prepared
+            .render(tile)
+            .map_err(|e| render_failure(e, &scene, &name));
         bar.finish_and_clear();
         image
     })??;
@@ -59,6 +72,48 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         eprintln!("warning: {warning}");
     }
     Ok(())
+}
+
+/// Refuses an output path that cannot take a file, before any work: a folder, or a file in a
+/// folder that does not exist.
+fn check_output_file(path: &Path) -> Result<(), Failure> {
+    if path.is_dir() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: is a folder (a PNG file name is expected; use --frames for a folder)",
+            path.display()
+        )));
+    }
+    if path.file_name().is_none() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: not a file name",
+            path.display()
+        )));
+    }
+    let parent = parent_of(path);
+    if !parent.is_dir() {
+        return Err(Failure::bad_input(format!(
+            "-o {}: the folder {} does not exist",
+            path.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
+}
+
+/// What a frame folder from a previous render holds: `frame_NNNN.png` files, and the GIF when
+/// it was written inside.
+fn frame_folder_entries(gif: Option<String>) -> EntryRule {
+    EntryRule {
+        accepts: Box::new(move |name: &str| is_frame_file(name) || Some(name) == gif.as_deref()),
+        what: "a frame of a previous render",
+    }
+}
+
+/// Whether `name` is a frame file this command writes: `frame_` digits `.png`.
+fn is_frame_file(name: &str) -> bool {
+    name.strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".png"))
+        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// Frames 0..n at t = k / fps into the output folder (and an animated GIF when asked).
@@ -74,22 +129,39 @@ fn render_animation(
             args.fps
         )));
     }
-    std::fs::create_dir_all(&args.output).map_err(|e| {
-        Failure::other(format!(
-            "{}: cannot create the frame folder: {e}",
-            args.output.display()
-        ))
-    })?;
+    // The GIF may go inside the frame folder, which exists only once the frames are written.
+    let gif_inside = args
+        .animation
+        .as_deref()
+        .filter(|gif| parent_of(gif) == args.output.as_path());
+    if let Some(gif) = &args.animation
+        && gif_inside.is_none()
+    {
+        check_output_file(gif).map_err(|f| Failure {
+            message: f.message.replacen("-o ", "--animation ", 1),
+            ..f
+        })?;
+    }
+    let keep_name = gif_inside
+        .and_then(|g| g.file_name())
+        .map(|n| n.to_string_lossy().into_owned());
     let fps = args.fps;
-    let dir = args.output.clone();
     let keep_for_gif = args.animation.is_some();
+    let name = scene_name(&args.common);
+    with_threads(args.common.threads, || {
+        check_limits(scene, &args.common, frames, keep_for_gif)
+    })??;
+    let folder = StagedFolder::create(&args.output, frame_folder_entries(keep_name))?;
+    let dir = folder.path().to_path_buf();
     let (images, warnings) = with_threads(args.common.threads, || -> Result<_, Failure> {
-        let prepared = PreparedScene::new(scene)?;
+        let prepared = PreparedScene::new(scene).map_err(|e| render_failure(e, scene, &name))?;
         let bar = progress(u64::from(frames));
         let mut kept = Vec::new();
         let mut warnings = Vec::new();
         for k in 0..frames {
-            let image = prepared.render_at(k as f32 / fps, tile)?;
+            let image = prepared
+                .render_at(k as f32 / fps, tile)
+                .map_err(|e| render_failure(e, scene, &name))?;
             write_png(
                 &dir.join(format!("frame_{k:04}.png")),
                 image.width,
@@ -105,6 +177,7 @@ fn render_animation(
         bar.finish_and_clear();
         Ok((kept, warnings))
     })??;
+    folder.commit()?;
     for warning in &warnings {
         eprintln!("warning: {warning}");
     }

@@ -8,7 +8,9 @@
 //! 2. **Vertex normal** = normalised sum of the unit face normals of every face touching a
 //!    vertex *with the same position*, each weighted by the face's angle at that corner
 //!    (angle-weighted, so the result does not depend on how quads were split into triangles;
-//!    welded across UV seams so shells do not crack). If that sum
+//!    welded across UV seams so shells do not crack). A sum or face normal whose squared length
+//!    under- or overflows f32 (tiny or huge faces) is scaled by its largest component before
+//!    normalising, so it still gives a unit vector. If that sum
 //!    is zero or not finite (an isolated vertex, or faces that cancel), the normal of the first
 //!    adjacent face with non-zero area is used, and if there is none, +Y.
 //! 3. **Face T and B** (eq. 3.1, 3.2, [`face_tangents`]): ∂p/∂u and ∂p/∂v of the face, solved
@@ -152,6 +154,18 @@ pub fn face_tangents(p: [Vec3; 3], uv: [Vec2; 3]) -> Option<(Vec3, Vec3)> {
     (t.is_finite() && bn.is_finite()).then_some((t, bn))
 }
 
+/// `v` normalised when its squared length leaves f32's normal range (tiny faces, or the tiny
+/// corner angles of long thin ones, whose squares underflow to imprecise subnormals; huge faces,
+/// whose squares overflow): scaled by its largest component first. `None` when zero or not
+/// finite. Ordinary vectors never come here, so their normals are unchanged.
+fn rescaled_unit(v: Vec3) -> Option<Vec3> {
+    let m = v.abs().max_element();
+    if !(m.is_finite() && m > 0.0) {
+        return None;
+    }
+    (v / m).try_normalize()
+}
+
 /// The angle at corner `a` of triangle `a b c`, in radians (0 for a degenerate corner):
 /// `atan2(|e1 × e2|, e1 · e2)`, accurate for small and obtuse angles alike.
 fn corner_angle(a: Vec3, b: Vec3, c: Vec3) -> f32 {
@@ -180,7 +194,11 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
         let p = [positions[i0], positions[i1], positions[i2]];
         let face_n = (p[1] - p[0]).cross(p[2] - p[0]);
         let area2 = face_n.length();
-        let unit = (area2 > 0.0 && area2.is_finite()).then(|| face_n / area2);
+        let unit = if area2.is_finite() && (area2 * area2).is_normal() {
+            Some(face_n / area2)
+        } else {
+            rescaled_unit(face_n)
+        };
         for (k, &i) in [i0, i1, i2].iter().enumerate() {
             let w = weld[i] as usize;
             if let Some(unit) = unit {
@@ -221,10 +239,14 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
     let vertices = (0..n)
         .map(|i| {
             let w = weld[i] as usize;
-            let normal = normal_sum[w]
-                .try_normalize()
-                .or(first_face_normal[w])
-                .unwrap_or(Vec3::Y);
+            let sum = normal_sum[w];
+            let normal = if sum.length_squared().is_normal() {
+                sum.try_normalize()
+            } else {
+                rescaled_unit(sum)
+            }
+            .or(first_face_normal[w])
+            .unwrap_or(Vec3::Y);
             let (dpdu_sum, dpdv_sum, weight) = pooled[i];
             let (dpdu, dpdv) = if weight > 0.0 && weight.is_finite() {
                 (dpdu_sum / weight, dpdv_sum / weight)

@@ -22,7 +22,7 @@ use glam::{Vec2, Vec3};
 
 pub use fins::{Edge, FinWindows, edges, is_silhouette, silhouette_edges};
 pub use frame::{TangentFrame, face_tangents};
-pub use obj::{LoadedMesh, load_obj};
+pub use obj::{LoadedMesh, ObjSummary, load_obj, load_obj_bytes, scan_obj};
 pub use procedural::{
     cylinder, cylinder_segments, leg, leg_segments, sphere, sphere_segments, torus, torus_segments,
 };
@@ -105,6 +105,34 @@ pub enum MeshError {
         index: u32,
         /// Number of vertices.
         vertex_count: usize,
+    },
+    /// A line of the file is malformed (or asks for something refused).
+    #[error("{}: {message}", location(path, Some(*line)))]
+    Syntax {
+        /// The file (OBJ or MTL).
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong, naming the statement.
+        message: String,
+    },
+    /// The path names something other than a regular file (a folder, a device, a pipe).
+    #[error("{path}: not a regular file")]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// The file is larger than a limit allows (checked before it is read).
+    #[error("{path}: {what} = {value} exceeds the limit of {limit}")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// What was counted.
+        what: &'static str,
+        /// The count.
+        value: u64,
+        /// The limit.
+        limit: u64,
     },
     /// Positions and texture coordinates have different lengths.
     #[error("{positions} positions but {uvs} texture coordinates")]

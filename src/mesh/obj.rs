@@ -4,7 +4,20 @@
 //!
 //! - **Normals in the file are ignored**: they are recomputed from the faces (thesis 3.1.4,
 //!   3.2.1: "the normal values are recalculated just to make sure the original is correct").
-//! - **Materials are not used**; a material library that fails to load only adds a warning.
+//! - **Every line is checked first** ([`scan_obj`], a streaming pass that allocates nothing per
+//!   line): `v` needs 3 finite numbers (then an optional `w` ≠ 0 or 3 colour values), `vt` 2
+//!   finite numbers, `vn` 3 numbers, `f` at least 3 vertices `v`, `v/vt`, `v//vn` or `v/vt/vn`
+//!   whose indices (1-based, negative = relative) exist, `usemtl` a name; a malformed line is a
+//!   [`MeshError::Syntax`] naming the file and line. The other statements of the OBJ
+//!   specification are ignored, as are points (`p`) and polylines (`l`) of two vertices; any
+//!   other first word is an error (the file is not an OBJ); like tobj, a polyline of three or more
+//!   vertices is a polygon. The file must be a regular file of at most
+//!   [`MAX_OBJ_BYTES`](crate::limits::MAX_OBJ_BYTES) with at most
+//!   [`MAX_OBJ_TRIANGLES`](crate::limits::MAX_OBJ_TRIANGLES) triangles.
+//! - **Materials are not used.** A material library named by `mtllib` that is missing only adds
+//!   a warning; one that exists is checked line by line like the OBJ (`Ka`/`Kd`/`Ks`/`Ke` 3
+//!   numbers, `Ns`/`Ni`/`d` a number, `illum` an integer, `newmtl` and `map_*` a name) and a
+//!   malformed line is an error naming the MTL file and line. tobj never parses it.
 //! - **No UVs** (or UVs on only some vertices): a *box projection* is generated and a warning
 //!   added. Each face is projected along the axis its normal is most aligned with
 //!   (ties: x, then y, then z), onto the other two coordinates, oriented so the projection is
@@ -36,21 +49,38 @@ pub struct LoadedMesh {
 /// ([`MeshError::Parse`]), it has no faces ([`MeshError::NoFaces`]), or a position is NaN or
 /// infinite ([`MeshError::NonFinite`], with the line and 1-based OBJ vertex number).
 pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
+    let summary = scan_obj(path)?;
     let file = File::open(path).map_err(|source| MeshError::Io {
         path: path.to_path_buf(),
         source,
     })?;
+    load_checked(path, &mut BufReader::new(file), summary.warnings)
+}
+
+/// Loads OBJ text held in memory, as [`load_obj`] loads a file; `name` names it in errors.
+/// Material libraries are not looked up (a warning says so). The entry point of the OBJ fuzz
+/// target and of the property tests.
+pub fn load_obj_bytes(bytes: &[u8], name: &Path) -> Result<LoadedMesh, MeshError> {
+    let summary = scan_obj_reader(name, bytes, None)?;
+    load_checked(name, &mut &bytes[..], summary.warnings)
+}
+
+/// tobj over text that [`scan_obj_reader`] accepted, then the merge into one [`Mesh`].
+fn load_checked(
+    path: &Path,
+    reader: &mut impl std::io::BufRead,
+    warnings: Vec<String>,
+) -> Result<LoadedMesh, MeshError> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
-        ..Default::default()
+        ignore_points: true,
+        ignore_lines: true,
     };
-    let parent = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let (models, materials) =
-        tobj::load_obj_buf(&mut BufReader::new(file), &options, |mtl: &Path| {
-            tobj::load_mtl(parent.join(mtl))
-        })
-        .map_err(|source| match source {
+    // Materials are not used and were checked by the scan: tobj gets an empty library.
+    let no_materials = |_: &Path| -> tobj::MTLLoadResult { Ok((Vec::new(), Default::default())) };
+    let (models, _materials) =
+        tobj::load_obj_buf(reader, &options, no_materials).map_err(|source| match source {
             tobj::LoadError::ReadError => MeshError::Io {
                 path: path.to_path_buf(),
                 source: std::io::Error::other("read error"),
@@ -60,13 +90,7 @@ pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
                 source,
             },
         })?;
-    let mut warnings = Vec::new();
-    if let Err(e) = materials {
-        warnings.push(format!(
-            "{}: materials not loaded ({e}); they are not used",
-            path.display()
-        ));
-    }
+    let mut warnings = warnings;
 
     let mut positions: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
@@ -152,6 +176,408 @@ fn non_finite(path: &Path, vertex: usize, p: Vec3) -> MeshError {
         vertex,
         value: p.to_array(),
     }
+}
+
+/// What [`scan_obj`] found: statement counts and warnings.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ObjSummary {
+    /// `v` statements.
+    pub positions: u64,
+    /// `vt` statements.
+    pub texcoords: u64,
+    /// `vn` statements.
+    pub normals: u64,
+    /// Triangles after fan triangulation of the `f` statements.
+    pub triangles: u64,
+    /// Non-fatal problems (a material library that is missing).
+    pub warnings: Vec<String>,
+}
+
+/// The statements of the OBJ specification that pelage does not use: accepted and ignored (any
+/// other first word on a line is an error, so a file that is not an OBJ is not read as an empty
+/// one).
+const OTHER_STATEMENTS: &[&str] = &[
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "p",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "g",
+    "s",
+    "mg",
+    "o",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "maplib",
+    "usemap",
+    "call",
+    "csh",
+];
+
+/// Longest line accepted in an OBJ or MTL file, bytes.
+const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Opens `path` for a line scan after checking it is a regular file of at most `max_bytes`.
+fn open_checked(path: &Path, max_bytes: u64, what: &'static str) -> Result<File, MeshError> {
+    let io = |source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(MeshError::NotAFile {
+            path: path.to_path_buf(),
+        });
+    }
+    if meta.len() > max_bytes {
+        return Err(MeshError::TooLarge {
+            path: path.to_path_buf(),
+            what,
+            value: meta.len(),
+            limit: max_bytes,
+        });
+    }
+    File::open(path).map_err(io)
+}
+
+/// Calls `each(line_number, line)` for every line of a checked file (1-based numbers, line
+/// endings stripped). Errors on a line that is not UTF-8 or longer than [`MAX_LINE_BYTES`].
+fn for_each_line(
+    path: &Path,
+    file: impl std::io::Read,
+    mut each: impl FnMut(usize, &str) -> Result<(), LineError>,
+) -> Result<(), MeshError> {
+    use std::io::{BufRead, Read};
+    let syntax = |line: usize, message: String| MeshError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let mut reader = BufReader::new(file).take(u64::MAX);
+    let mut buf = Vec::new();
+    let mut number = 0usize;
+    loop {
+        buf.clear();
+        reader.set_limit(MAX_LINE_BYTES as u64 + 1);
+        let n = reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|source| MeshError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        if n == 0 {
+            return Ok(());
+        }
+        number += 1;
+        if buf.last() != Some(&b'\n') && buf.len() > MAX_LINE_BYTES {
+            return Err(syntax(
+                number,
+                format!("line longer than {MAX_LINE_BYTES} bytes"),
+            ));
+        }
+        let text = std::str::from_utf8(&buf)
+            .map_err(|_| syntax(number, "not valid UTF-8 text".to_string()))?;
+        each(number, text.trim_end_matches(['\n', '\r'])).map_err(|e| match e {
+            LineError::Message(m) => syntax(number, m),
+            LineError::Mesh(e) => e,
+        })?;
+    }
+}
+
+/// Why a line was refused: a message (made into [`MeshError::Syntax`] with the line), or a
+/// finished error.
+enum LineError {
+    Message(String),
+    Mesh(MeshError),
+}
+
+impl From<String> for LineError {
+    fn from(m: String) -> Self {
+        LineError::Message(m)
+    }
+}
+
+impl From<&str> for LineError {
+    fn from(m: &str) -> Self {
+        LineError::Message(m.to_string())
+    }
+}
+
+/// Parses one number of statement `what`; `finite` refuses NaN and infinities.
+fn number(word: Option<&str>, what: &str, finite: bool) -> Result<f32, String> {
+    let word = word.ok_or_else(|| format!("`{what}` has too few numbers"))?;
+    let x: f32 = word
+        .parse()
+        .map_err(|_| format!("`{what}`: {word:?} is not a number"))?;
+    if finite && !x.is_finite() {
+        return Err(format!("`{what}`: {word} is not a finite number"));
+    }
+    Ok(x)
+}
+
+/// Resolves one index of a face vertex (1-based, negative = relative to `count` so far) to
+/// 0-based; `None` is returned for an empty field (`v//vn`).
+fn face_index(field: &str, count: u64, kind: &str, corner: &str) -> Result<Option<u64>, String> {
+    if field.is_empty() {
+        return Ok(None);
+    }
+    let i: i64 = field
+        .parse()
+        .map_err(|_| format!("face vertex {corner:?}: {field:?} is not an index"))?;
+    if i == 0 {
+        return Err(format!(
+            "face vertex {corner:?}: {kind} index 0 (OBJ indices start at 1)"
+        ));
+    }
+    if i < 0 {
+        let back = i.unsigned_abs();
+        if back > count {
+            return Err(format!(
+                "face vertex {corner:?}: relative {kind} index {i}, but only {count} are defined above"
+            ));
+        }
+        return Ok(Some(count - back));
+    }
+    Ok(Some(i as u64 - 1))
+}
+
+/// Checks every line of an OBJ file (see the module docs) and counts what it holds, without
+/// building anything: cheap enough to run before deciding whether the mesh fits in memory.
+/// Material libraries it names are checked too ([`MeshError::Syntax`] naming the MTL file);
+/// a missing one is a warning.
+pub fn scan_obj(path: &Path) -> Result<ObjSummary, MeshError> {
+    let file = open_checked(path, crate::limits::MAX_OBJ_BYTES, "file size in bytes")?;
+    scan_obj_reader(path, file, Some(path.parent().unwrap_or(Path::new(""))))
+}
+
+/// [`scan_obj`] over any reader; material libraries are looked up in `library_dir` (not at
+/// all when `None`: a warning says they were not read).
+pub fn scan_obj_reader(
+    path: &Path,
+    file: impl std::io::Read,
+    library_dir: Option<&Path>,
+) -> Result<ObjSummary, MeshError> {
+    let mut s = ObjSummary::default();
+    // Largest positive index of each kind, with its line, checked against the totals at the end
+    // (forward references are allowed, as tobj allows them).
+    let mut highest: [(u64, usize); 3] = [(0, 0); 3];
+    let mut libraries: Vec<(usize, String)> = Vec::new();
+    for_each_line(path, file, |line, text| {
+        let mut words = text.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let mut p = [0.0f32; 3];
+                for c in &mut p {
+                    *c = number(words.next(), "v", false)?;
+                }
+                if !p.iter().all(|c| c.is_finite()) {
+                    return Err(LineError::Mesh(MeshError::NonFinite {
+                        path: path.to_path_buf(),
+                        line: Some(line),
+                        vertex: s.positions as usize + 1,
+                        value: p,
+                    }));
+                }
+                let rest: Vec<&str> = words.collect();
+                match rest.len() {
+                    0 => {}
+                    1 => {
+                        let w = number(Some(rest[0]), "v", true)?;
+                        if w == 0.0 {
+                            return Err("`v`: weight w = 0".into());
+                        }
+                        if p.iter().any(|c| !(c / w).is_finite()) {
+                            return Err(format!("`v`: {p:?} / w = {w} is not finite").into());
+                        }
+                    }
+                    3 => {
+                        for word in rest {
+                            number(Some(word), "v", false)?;
+                        }
+                    }
+                    n => {
+                        return Err(format!(
+                            "`v` takes 3 coordinates, then nothing, a weight or 3 colour values; found {} values",
+                            3 + n
+                        )
+                        .into());
+                    }
+                }
+                s.positions += 1;
+            }
+            Some("vt") => {
+                number(words.next(), "vt", true)?;
+                number(words.next(), "vt", true)?;
+                s.texcoords += 1;
+            }
+            Some("vn") => {
+                for _ in 0..3 {
+                    number(words.next(), "vn", false)?;
+                }
+                s.normals += 1;
+            }
+            Some(statement @ ("f" | "l")) => {
+                let mut corners = 0u64;
+                for corner in words {
+                    let fields: Vec<&str> = corner.split('/').collect();
+                    if fields.len() > 3 {
+                        return Err(format!(
+                            "face vertex {corner:?}: expected v, v/vt, v//vn or v/vt/vn"
+                        )
+                        .into());
+                    }
+                    let counts = [s.positions, s.texcoords, s.normals];
+                    for (k, kind) in ["position", "texture coordinate", "normal"]
+                        .iter()
+                        .enumerate()
+                    {
+                        let field = fields.get(k).copied().unwrap_or("");
+                        if k == 0 && field.is_empty() {
+                            return Err(format!(
+                                "face vertex {corner:?}: the position index is missing"
+                            )
+                            .into());
+                        }
+                        if let Some(i) = face_index(field, counts[k], kind, corner)?
+                            && i + 1 > highest[k].0
+                        {
+                            highest[k] = (i + 1, line);
+                        }
+                    }
+                    corners += 1;
+                }
+                // tobj turns a polyline of 3 or more vertices into a polygon too.
+                if corners < 3 && statement == "f" {
+                    return Err(format!("`f` needs at least 3 vertices, found {corners}").into());
+                }
+                s.triangles += corners.saturating_sub(2);
+            }
+            Some("usemtl") if words.next().is_none() => {
+                return Err("`usemtl` needs a material name".into());
+            }
+            Some("usemtl") => {}
+            Some("mtllib") => {
+                let name = text.trim_start()["mtllib".len()..].trim();
+                if name.is_empty() {
+                    return Err("`mtllib` needs a file name".into());
+                }
+                libraries.push((line, name.to_string()));
+            }
+            Some(word) if word.starts_with('#') || OTHER_STATEMENTS.contains(&word) => {}
+            Some(word) => {
+                let shown: String = word.chars().take(40).collect();
+                return Err(format!("unknown statement {shown:?} (not an OBJ file?)").into());
+            }
+            None => {}
+        }
+        Ok(())
+    })?;
+    let totals = [s.positions, s.texcoords, s.normals];
+    for (k, kind) in ["vertex position", "texture coordinate", "normal"]
+        .iter()
+        .enumerate()
+    {
+        let (index, line) = highest[k];
+        // tobj ignores texture and normal indices when the file has none of them.
+        let ignored = k > 0 && totals[k] == 0;
+        if index > totals[k] && !ignored {
+            return Err(MeshError::Syntax {
+                path: path.to_path_buf(),
+                line,
+                message: format!(
+                    "face refers to {kind} {index}, but the file has {}",
+                    totals[k]
+                ),
+            });
+        }
+    }
+    if s.triangles > crate::limits::MAX_OBJ_TRIANGLES {
+        return Err(MeshError::TooLarge {
+            path: path.to_path_buf(),
+            what: "triangles",
+            value: s.triangles,
+            limit: crate::limits::MAX_OBJ_TRIANGLES,
+        });
+    }
+    if s.triangles == 0 {
+        return Err(MeshError::NoFaces {
+            path: path.to_path_buf(),
+        });
+    }
+    let Some(dir) = library_dir else {
+        if let Some((line, name)) = libraries.first() {
+            s.warnings.push(format!(
+                "{}:{line}: material library {name} not read; materials are not used",
+                path.display()
+            ));
+        }
+        return Ok(s);
+    };
+    for (line, name) in libraries {
+        let mtl = dir.join(&name);
+        if !mtl.exists() {
+            s.warnings.push(format!(
+                "{}:{line}: material library {name} not found; materials are not used",
+                path.display()
+            ));
+            continue;
+        }
+        scan_mtl(&mtl)?;
+    }
+    Ok(s)
+}
+
+/// Checks every line of an MTL file (module docs). The materials themselves are not used.
+pub fn scan_mtl(path: &Path) -> Result<(), MeshError> {
+    let file = open_checked(path, crate::limits::MAX_MTL_BYTES, "file size in bytes")?;
+    for_each_line(path, file, |_, text| {
+        let mut words = text.split_whitespace();
+        let Some(key) = words.next() else {
+            return Ok(());
+        };
+        match key {
+            "Ka" | "Kd" | "Ks" | "Ke" => {
+                for _ in 0..3 {
+                    number(words.next(), key, false)?;
+                }
+            }
+            "Ns" | "Ni" | "d" => {
+                number(words.next(), key, false)?;
+            }
+            "illum" => {
+                let word = words
+                    .next()
+                    .ok_or_else(|| "`illum` needs an integer".to_string())?;
+                word.parse::<i32>()
+                    .map_err(|_| format!("`illum`: {word:?} is not an integer"))?;
+            }
+            "newmtl" | "map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns"
+            | "map_ns" | "map_NS" | "bump" | "map_d"
+                if words.next().is_none() =>
+            {
+                return Err(format!("`{key}` needs a name").into());
+            }
+            _ => {}
+        }
+        Ok(())
+    })
 }
 
 /// Box projection (module docs): returns new positions, UVs and indices, with vertices

@@ -7,8 +7,10 @@
 //! viewport but inside the guard band are discarded by the scissor of binning, not by clipping.
 //!
 //! Invariants: a vertex with a NaN or infinite coordinate drops its whole triangle; no output
-//! vertex has `w < W_MIN`; an edge shared by two triangles is cut at bit-identical points, because
-//! the intersection is always computed from the inside endpoint towards the outside one.
+//! vertex has `w < W_MIN` beyond rounding (and none has `w ≤ 0`: a polygon whose cut vertices
+//! lose all precision, from coordinates near `f32::MAX`, is dropped); an edge shared by two
+//! triangles is cut at bit-identical points, because the intersection is always computed from
+//! the inside endpoint towards the outside one.
 
 use super::varyings::Varyings;
 use glam::Vec4;
@@ -116,6 +118,17 @@ pub fn clip_triangle<V: Varyings>(
             return;
         }
         polygon[..count].copy_from_slice(&scratch[..count]);
+    }
+    // Coordinates near f32::MAX (where `GUARD_BAND·w` overflows or an intersection cancels)
+    // can leave a cut vertex at w ≤ 0, NaN, or outside the guard band by more than rounding;
+    // such a polygon is dropped so that setup's fixed-point bound holds. Ordinary input is never
+    // near these thresholds (cut vertices are within rounding of their plane), so this never
+    // changes an image.
+    if !polygon[..count]
+        .iter()
+        .all(|v| super::setup::within_guard_band(v.position))
+    {
+        return;
     }
     for i in 1..count - 1 {
         emit([polygon[0], polygon[i], polygon[i + 1]]);

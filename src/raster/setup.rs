@@ -146,8 +146,18 @@ pub fn snap(position: glam::Vec4, width: u32, height: u32) -> (Subpixel, f32, f3
     (snapped, ndc.z, inv_w)
 }
 
+/// Whether a clip-space position is one [`super::clip::clip_triangle`] can emit: finite, in
+/// front of the eye with a finite `1/w` (not a subnormal `w`), and inside the guard band (with
+/// a margin of one for rounding).
+#[inline]
+pub fn within_guard_band(p: glam::Vec4) -> bool {
+    let band = (super::clip::GUARD_BAND + 1.0) * p.w;
+    p.is_finite() && p.w > 0.0 && (1.0 / p.w).is_finite() && p.x.abs() <= band && p.y.abs() <= band
+}
+
 /// Sets up one clipped triangle for a `width`×`height` viewport. Returns `None` for
-/// zero-area, culled or fully off-screen triangles. The varyings are reordered with the
+/// zero-area, culled or fully off-screen triangles, and for vertices outside the guard band
+/// (unclipped input, see [`within_guard_band`]). The varyings are reordered with the
 /// vertices when a front face is flipped to positive area.
 pub fn setup_triangle<V: Varyings>(
     triangle: &[ClipVertex<V>; 3],
@@ -155,6 +165,11 @@ pub fn setup_triangle<V: Varyings>(
     height: u32,
     cull: CullMode,
 ) -> Option<(SetupTriangle, [V; 3])> {
+    // Setup's overflow bound holds for clipped triangles; anything else (a caller that did not
+    // clip) is refused rather than allowed to overflow the fixed-point arithmetic.
+    if !triangle.iter().all(|v| within_guard_band(v.position)) {
+        return None;
+    }
     let snapped = triangle.map(|v| snap(v.position, width, height));
     let [p0, p1, p2] = snapped.map(|s| s.0);
     let area = (p1.x - p0.x) * (p2.y - p0.y) - (p1.y - p0.y) * (p2.x - p0.x);

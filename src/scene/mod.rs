@@ -14,6 +14,9 @@ pub use validate::Limits;
 
 /// The furred torus of thesis figure 3.1, embedded so `pelage render` works with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/torus.toml");
+/// Largest scene file accepted, bytes (a scene is a few hundred bytes; this only stops a
+/// wrong path from reading a huge file).
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
 /// The name errors use for the embedded scene.
 pub const DEFAULT_SCENE_NAME: &str = "<embedded scenes/torus.toml>";
 
@@ -559,10 +562,19 @@ impl Default for BurnSettings {
 impl Scene {
     /// Parses and validates scene text; `file` names it in errors, `base_dir` resolves paths.
     pub fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError {
-            file: file.to_string(),
-            line: e.span().map(|s| line_of_offset(text, s.start)),
-            message: e.message().trim().to_string(),
+        let mut scene: Scene = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| line_of_offset(text, s.start));
+            let message = e.message().trim().replace('\n', " ");
+            // Name the key when the line holds one (serde's messages name only the type).
+            let key = line.and_then(|l| validate::key_at_line(text, l));
+            SceneError {
+                file: file.to_string(),
+                line,
+                message: match key {
+                    Some(key) if !message.contains(&key) => format!("{key}: {message}"),
+                    _ => message,
+                },
+            }
         })?;
         scene.base_dir = base_dir.to_path_buf();
         validate::validate(&scene, &Limits::default()).map_err(|(key, message)| SceneError {
@@ -575,10 +587,31 @@ impl Scene {
 
     /// Reads, parses and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        let error = |line, message| SceneError {
             file: path.display().to_string(),
-            line: None,
-            message: format!("cannot read the scene: {e}"),
+            line,
+            message,
+        };
+        let meta = std::fs::metadata(path)
+            .map_err(|e| error(None, format!("cannot read the scene: {e}")))?;
+        if !meta.is_file() {
+            return Err(error(None, "not a regular file".into()));
+        }
+        if meta.len() > MAX_SCENE_BYTES {
+            return Err(error(
+                None,
+                format!(
+                    "the scene is {} bytes, more than the limit of {MAX_SCENE_BYTES}",
+                    meta.len()
+                ),
+            ));
+        }
+        let bytes =
+            std::fs::read(path).map_err(|e| error(None, format!("cannot read the scene: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+            error(Some(line), "not valid UTF-8 text".into())
         })?;
         let dir = path.parent().unwrap_or(Path::new("."));
         Scene::parse(&text, &path.display().to_string(), dir)

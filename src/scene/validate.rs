@@ -31,6 +31,12 @@ impl Default for Limits {
     }
 }
 
+/// Smallest mesh size, scale and fur length accepted, world units.
+const MIN_SIZE: f32 = 1.0e-6;
+/// Largest mesh size, scale and fur length accepted, world units (f32 positions stay far from
+/// overflow, and squared lengths stay finite).
+const MAX_SIZE: f32 = 1.0e6;
+
 /// A failed check: the dotted key and the message.
 pub(super) type Failure = (String, String);
 
@@ -132,11 +138,16 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     }
 
     let m = &scene.mesh;
-    positive("mesh.major_radius", m.major_radius)?;
-    positive("mesh.minor_radius", m.minor_radius)?;
-    positive("mesh.radius", m.radius)?;
-    positive("mesh.height", m.height)?;
-    positive("mesh.scale", m.scale)?;
+    for (key, value) in [
+        ("mesh.major_radius", m.major_radius),
+        ("mesh.minor_radius", m.minor_radius),
+        ("mesh.radius", m.radius),
+        ("mesh.height", m.height),
+        ("mesh.scale", m.scale),
+    ] {
+        positive(key, value)?;
+        range_f32(key, value, MIN_SIZE, MAX_SIZE)?;
+    }
     range_u32(
         "mesh.model_resolution",
         m.model_resolution,
@@ -180,12 +191,18 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         ));
     }
     positive("fur.model_difference", f.model_difference)?;
+    range_f32(
+        "fur.model_difference",
+        f.model_difference,
+        MIN_SIZE,
+        MAX_SIZE,
+    )?;
     for (k, v) in f.texture_repeat.iter().enumerate() {
         range_f32(&format!("fur.texture_repeat[{k}]"), *v, 0.001, 10_000.0)?;
     }
     colour("fur.colour", f.colour)?;
     range_f32("fur.colour_variation", f.colour_variation, 0.0, 1.0)?;
-    range_f32("fur.slope_deg", f.slope_deg, 0.0, 89.0)?;
+    range_f32("fur.slope_deg", f.slope_deg, 0.0, crate::fur::MAX_SLOPE_DEG)?;
     range_f32("fur.curl", f.curl, 0.0, 1.0)?;
     range_f32("fur.jitter", f.jitter, 0.0, 1.0)?;
     range_f32("fur.min_height", f.min_height, 0.01, 1.0)?;
@@ -369,6 +386,45 @@ pub(super) fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
     table_line
 }
 
+/// The dotted key written on 1-based `line` (`fur.number_of_shells`, `spots[1].radii`), or the
+/// table when the line is a header; `None` outside any key.
+pub(super) fn key_at_line(text: &str, line: usize) -> Option<String> {
+    let mut table = String::new();
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    for (n, raw) in text.lines().enumerate() {
+        let l = raw.split('#').next().unwrap_or("").trim();
+        let header = if let Some(h) = l.strip_prefix("[[").and_then(|h| h.split_once("]]")) {
+            let name = h.0.trim().to_string();
+            let count = counts.entry(name.clone()).or_insert(0);
+            *count += 1;
+            Some(format!("{name}[{}]", *count - 1))
+        } else {
+            l.strip_prefix('[')
+                .and_then(|h| h.split_once(']'))
+                .map(|h| h.0.trim().to_string())
+        };
+        if let Some(h) = header {
+            table = h;
+            if n + 1 == line {
+                return Some(table).filter(|t| !t.is_empty());
+            }
+            continue;
+        }
+        if n + 1 == line {
+            let name = l.split_once('=').map(|(k, _)| k.trim())?;
+            if name.is_empty() || name.contains(char::is_whitespace) {
+                return None;
+            }
+            return Some(if table.is_empty() {
+                name.to_string()
+            } else {
+                format!("{table}.{name}")
+            });
+        }
+    }
+    None
+}
+
 /// The line of `key` in the `index`-th `[[array]]` table (or the table's header line).
 fn line_in_array_table(text: &str, array: &str, index: usize, key: &str) -> Option<usize> {
     let header = format!("[[{array}]]");
@@ -447,6 +503,19 @@ mod tests {
         assert!(err.message.contains("light.direction"), "{err}");
         let err = parse("[fur]\nmodel_difference = nan\n").unwrap_err();
         assert!(err.message.contains("fur.model_difference"), "{err}");
+    }
+
+    #[test]
+    fn type_errors_name_the_key() {
+        let err = parse("seed = 1\n[image]\nwidth = \"big\"\n").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.starts_with("image.width: "), "{err}");
+        let err = parse("[[spots]]\n[[spots]]\nradii = [1, 2]\n").unwrap_err();
+        assert!(err.message.starts_with("spots[1].radii: "), "{err}");
+        let err = parse("time = \"noon\"\n").unwrap_err();
+        assert!(err.message.starts_with("time: "), "{err}");
+        assert_eq!(super::key_at_line("[a]\n\n", 2), None);
+        assert_eq!(super::key_at_line("[a.b]\n", 1), Some("a.b".into()));
     }
 
     #[test]

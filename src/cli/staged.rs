@@ -1,0 +1,127 @@
+//! Output folders that never look complete when they are not.
+//!
+//! A folder of outputs (an animation's frames, an export) is written into a hidden temporary
+//! sibling (`.NAME.PID.tmp`) and renamed to its name only once every file is in it. An existing
+//! output folder is replaced only when it holds nothing but what this command writes (a
+//! previous run's output); any other existing folder is refused before work starts. On an error
+//! the temporary folder is removed; an interrupted process leaves at most a hidden `.tmp` folder.
+
+use super::Failure;
+use std::path::{Path, PathBuf};
+
+/// Which entries an existing output folder may hold for it to be replaced.
+pub struct EntryRule {
+    /// Whether a top-level entry (file or folder name) is one this command writes.
+    pub accepts: Box<dyn Fn(&str) -> bool>,
+    /// What an accepted entry is, for the refusal message ("a frame of a previous render").
+    pub what: &'static str,
+}
+
+/// An output folder being written: files go to [`StagedFolder::path`], renamed to the target at
+/// [`StagedFolder::commit`]; dropped without a commit, it removes itself.
+pub struct StagedFolder {
+    target: PathBuf,
+    temporary: PathBuf,
+    rule: EntryRule,
+    committed: bool,
+}
+
+impl StagedFolder {
+    /// Checks the target can be (re)placed and creates the temporary folder beside it.
+    pub fn create(target: &Path, rule: EntryRule) -> Result<StagedFolder, Failure> {
+        let other = |m: String| Failure::other(format!("{}: {m}", target.display()));
+        let name = target
+            .file_name()
+            .ok_or_else(|| {
+                Failure::bad_input(format!("-o {}: not a folder name", target.display()))
+            })?
+            .to_string_lossy()
+            .into_owned();
+        if target.exists() {
+            replaceable(target, &rule)?;
+        }
+        let parent = parent_of(target);
+        std::fs::create_dir_all(parent).map_err(|e| {
+            other(format!(
+                "cannot create the folder {}: {e}",
+                parent.display()
+            ))
+        })?;
+        let temporary = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+        if temporary.exists() {
+            let _ = std::fs::remove_dir_all(&temporary);
+        }
+        std::fs::create_dir(&temporary)
+            .map_err(|e| other(format!("cannot create the temporary folder: {e}")))?;
+        Ok(StagedFolder {
+            target: target.to_path_buf(),
+            temporary,
+            rule,
+            committed: false,
+        })
+    }
+
+    /// Where the files go until [`StagedFolder::commit`].
+    pub fn path(&self) -> &Path {
+        &self.temporary
+    }
+
+    /// Moves the finished folder into place (replacing a previous run's output).
+    pub fn commit(mut self) -> Result<(), Failure> {
+        let other = |m: String| Failure::other(format!("{}: {m}", self.target.display()));
+        let old = self.temporary.with_extension("old");
+        if self.target.exists() {
+            replaceable(&self.target, &self.rule)?;
+            std::fs::rename(&self.target, &old)
+                .map_err(|e| other(format!("cannot move the previous output aside: {e}")))?;
+        }
+        std::fs::rename(&self.temporary, &self.target)
+            .map_err(|e| other(format!("cannot move the output into place: {e}")))?;
+        self.committed = true;
+        if old.exists() {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedFolder {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.temporary);
+        }
+    }
+}
+
+/// An existing output folder may be replaced only when every entry in it is accepted by `rule`.
+fn replaceable(target: &Path, rule: &EntryRule) -> Result<(), Failure> {
+    let refuse = |why: String| {
+        Failure::bad_input(format!(
+            "-o {}: {why}; choose a new folder or remove it",
+            target.display()
+        ))
+    };
+    if !target.is_dir() {
+        return Err(refuse("exists and is not a folder".into()));
+    }
+    let entries = std::fs::read_dir(target).map_err(|e| refuse(format!("cannot be read ({e})")))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| refuse(format!("cannot be read ({e})")))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !(rule.accepts)(&name) {
+            return Err(refuse(format!(
+                "holds {name:?}, which is not {}",
+                rule.what
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The folder a path's file goes into (`.` for a bare file name).
+pub fn parent_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}

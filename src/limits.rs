@@ -1,0 +1,462 @@
+//! Resource limits: how much memory and work a scene asks for, estimated from the scene alone
+//! (and, for an OBJ mesh, a streaming scan of the file), *before* anything large is allocated.
+//!
+//! A reference renderer is fed machine-generated scenes in bulk; a scene that would need 60 GiB
+//! or a week of baking must be refused in milliseconds with a message that names the limit,
+//! not discovered by the out-of-memory killer. Two budgets are checked:
+//!
+//! - **Memory** ([`MemoryEstimate`]): the sum of the large buffers a render holds at its peak,
+//!   each named (framebuffer, kept animation frames, strands and cones, bake grids, shell and fin
+//!   textures with their mips, the mesh, its edges, pending set-up triangles, OBJ parsing). The
+//!   figures are the sizes of the data structures times their counts, with documented
+//!   typical-case factors where a count depends on the view (set-up triangles, fin edges); they
+//!   are an estimate of the peak, not a bound. The default limit is [`DEFAULT_MAX_MEMORY`]
+//!   (8 GiB), fixed rather than a fraction of the machine's memory so that the same scene is
+//!   accepted or refused on every machine; `pelage render --max-memory` raises it.
+//! - **Bake work** ([`bake_work`]): texel writes and segment tests of the shell and fin bakes,
+//!   the only stage whose cost can grow without bound while memory stays small (thick strands ×
+//!   many strands × fine grids). The default limit is [`DEFAULT_MAX_BAKE_WORK`]; `--max-work`
+//!   raises it.
+//!
+//! Bake grids are baked one layer per worker thread, so their share of the estimate counts one
+//! grid per thread (the `threads` argument): with `--threads` given, acceptance does not depend
+//! on the machine.
+
+use crate::mesh::{self, MeshError};
+use crate::scene::{MeshKind, Scene};
+use std::fmt;
+
+/// Default memory limit: 8 GiB.
+pub const DEFAULT_MAX_MEMORY: u64 = 8 << 30;
+
+/// Default bake work limit, in texel writes plus segment tests (about a minute of baking on
+/// one core of a 2020s machine).
+pub const DEFAULT_MAX_BAKE_WORK: u64 = 20_000_000_000;
+
+/// Largest OBJ file accepted, bytes (checked before the file is read).
+pub const MAX_OBJ_BYTES: u64 = 2 << 30;
+
+/// Largest triangle count an OBJ file may have (after fan triangulation of its polygons).
+pub const MAX_OBJ_TRIANGLES: u64 = 32_000_000;
+
+/// Largest MTL file accepted, bytes.
+pub const MAX_MTL_BYTES: u64 = 64 << 20;
+
+/// Most animation frames one render may ask for.
+pub const MAX_FRAMES: u32 = 100_000;
+
+// Sizes of the data structures counted (bytes). Fixed here rather than taken from
+// `size_of` so the estimate does not change when a private layout does.
+const FRAMEBUFFER_PER_PIXEL: u64 = 16 + 4 + 4 + 4; // f32 RGBA + f32 depth + RGBA8 + PNG bytes
+const GIF_PER_PIXEL: u64 = 4 + 1; // kept RGBA8 frame + its share of the GIF
+const STRAND_BYTES: u64 = 100; // root, 4 control points, radii, colour, lean
+const CONE_BYTES: u64 = 68; // p0, p1, r0, r1, axis, e1, e2
+const SAMPLE_BYTES: u64 = 20; // one supersample of a bake grid
+const DOWNSAMPLE_PER_TEXEL: u64 = 12 + 12 + 4 + 1; // colour, tangent, alpha, covered
+const SHELL_PER_TEXEL: u64 = 8 + 11; // colour + tangent RGBA8 as baked, then as textures × 4/3
+const VERTEX_BYTES: u64 = 92 + 100; // mesh::Vertex plus the temporaries of building frames
+const CLIP_VERTEX_BYTES: u64 = 16 + 88; // clip position + the fur varyings
+const SETUP_TRIANGLE_BYTES: u64 = 160 + 3 * 88 + 8; // set-up triangle, varyings, bin entries
+const EDGE_BYTES_PER_TRIANGLE: u64 = 180; // ~1.5 edges per triangle with their face lists
+const OBJ_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 3 * 48 + 64; // tobj faces, index map, copies
+const OBJ_BYTES_PER_ATTRIBUTE: u64 = 12 + 12; // tobj's copy and ours
+/// Set-up triangles are kept until this many are pending (the rasterizer's auto-flush).
+const PENDING_TRIANGLES: u64 = 1 << 20;
+
+/// How big the mesh is: triangles and vertices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MeshSize {
+    /// Triangles.
+    pub triangles: u64,
+    /// Vertices (an upper estimate for OBJ files: three per triangle).
+    pub vertices: u64,
+    /// For OBJ files, the `v`, `vt` and `vn` statements read (0 for procedural meshes).
+    pub file_attributes: u64,
+}
+
+/// The mesh size a scene asks for: exact for procedural meshes (from their segment counts), a
+/// streaming scan for OBJ files (which also finds malformed lines, naming them).
+pub fn mesh_size(scene: &Scene) -> Result<MeshSize, MeshError> {
+    let m = &scene.mesh;
+    let grid = |(a, b): (u32, u32)| {
+        let (a, b) = (u64::from(a), u64::from(b));
+        MeshSize {
+            triangles: 2 * a * b,
+            vertices: (a + 1) * (b + 2),
+            file_attributes: 0,
+        }
+    };
+    Ok(match m.kind {
+        MeshKind::Torus => grid(mesh::torus_segments(
+            m.major_radius,
+            m.minor_radius,
+            m.model_resolution,
+        )),
+        MeshKind::Sphere => grid(mesh::sphere_segments(m.model_resolution)),
+        MeshKind::Cylinder => grid(mesh::cylinder_segments(
+            m.radius,
+            m.height,
+            m.model_resolution,
+        )),
+        MeshKind::Leg => grid(mesh::leg_segments(m.model_resolution)),
+        MeshKind::Obj => {
+            let path = scene.base_dir.join(m.path.clone().unwrap_or_default());
+            let summary = mesh::obj::scan_obj(&path)?;
+            MeshSize {
+                triangles: summary.triangles,
+                vertices: 3 * summary.triangles,
+                file_attributes: summary.positions + summary.texcoords + summary.normals,
+            }
+        }
+    })
+}
+
+/// What a render does besides the one frame: how many frames, whether they are all kept (for
+/// an animated GIF), and how many worker threads bake at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Workload {
+    /// Frames rendered (1 for a still).
+    pub frames: u32,
+    /// Whether every frame is kept in memory (to write an animated GIF at the end).
+    pub keep_frames: bool,
+    /// Worker threads (bake grids are built one per thread).
+    pub threads: u32,
+}
+
+impl Default for Workload {
+    fn default() -> Self {
+        Workload {
+            frames: 1,
+            keep_frames: false,
+            threads: 1,
+        }
+    }
+}
+
+/// The estimated peak memory of a render, by part.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MemoryEstimate {
+    /// Named contributions, bytes, in pipeline order.
+    pub parts: Vec<(&'static str, u64)>,
+}
+
+impl MemoryEstimate {
+    /// The sum of the parts (saturating).
+    pub fn total(&self) -> u64 {
+        self.parts
+            .iter()
+            .fold(0u64, |sum, (_, b)| sum.saturating_add(*b))
+    }
+
+    /// The largest part.
+    pub fn largest(&self) -> (&'static str, u64) {
+        self.parts
+            .iter()
+            .copied()
+            .max_by_key(|&(_, b)| b)
+            .unwrap_or(("nothing", 0))
+    }
+}
+
+/// Saturating product of several counts.
+fn product(factors: &[u64]) -> u64 {
+    factors.iter().fold(1u64, |p, &f| p.saturating_mul(f))
+}
+
+/// The peak memory of rendering `scene` with a mesh of `mesh` size (see the module docs for
+/// what is counted).
+pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> MemoryEstimate {
+    let pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
+    let f = &scene.fur;
+    let shells = u64::from(f.number_of_shells);
+    let strands = u64::from(f.number_of_strands);
+    let res = u64::from(f.texture_resolution);
+    let side = res * u64::from(f.supersample);
+    let threads = u64::from(work.threads.max(1));
+    let fin_strands = u64::from(crate::fur::FurParams::default().fin_strands);
+    let segments = u64::from(f.strand_resolution);
+    let kept_frames = if work.keep_frames {
+        u64::from(work.frames)
+    } else {
+        0
+    };
+    let pending = mesh
+        .triangles
+        .saturating_mul(shells + 2)
+        .min(PENDING_TRIANGLES.saturating_add(mesh.triangles));
+    let mut parts = vec![
+        ("the framebuffer", product(&[pixels, FRAMEBUFFER_PER_PIXEL])),
+        (
+            "the animation frames kept for the GIF",
+            product(&[pixels, kept_frames, GIF_PER_PIXEL]),
+        ),
+        (
+            "strands and their cones (fur.number_of_strands × fur.strand_resolution)",
+            product(&[strands + fin_strands, STRAND_BYTES + segments * CONE_BYTES]),
+        ),
+        (
+            "bake grids ((fur.texture_resolution × fur.supersample)² per worker thread)",
+            product(&[side, side, shells.min(threads) + 1, SAMPLE_BYTES]).saturating_add(product(
+                &[res, res, shells.min(threads) + 1, DOWNSAMPLE_PER_TEXEL],
+            )),
+        ),
+        (
+            "shell textures (fur.number_of_shells × fur.texture_resolution²)",
+            product(&[shells + 1, res, res, SHELL_PER_TEXEL]),
+        ),
+        (
+            "the mesh",
+            product(&[mesh.vertices, VERTEX_BYTES])
+                .saturating_add(product(&[mesh.triangles, 12 + EDGE_BYTES_PER_TRIANGLE])),
+        ),
+        (
+            "set-up triangles (mesh triangles × shells)",
+            product(&[mesh.vertices, CLIP_VERTEX_BYTES])
+                .saturating_add(product(&[pending, SETUP_TRIANGLE_BYTES])),
+        ),
+    ];
+    if mesh.file_attributes > 0 || scene.mesh.kind == MeshKind::Obj {
+        parts.push((
+            "reading the OBJ file",
+            product(&[mesh.triangles, OBJ_BYTES_PER_TRIANGLE])
+                .saturating_add(product(&[mesh.file_attributes, OBJ_BYTES_PER_ATTRIBUTE])),
+        ));
+    }
+    MemoryEstimate { parts }
+}
+
+/// Bake work: supersample texel writes plus segment tests of the shell and fin bakes.
+///
+/// Each strand's cross-section covers `π·r²` of the tile, `r = fur.base_thickness`; a layer's
+/// cones paint about `number_of_strands · π·r² · side²` texels, once per segment falling in the
+/// layer (at least one: `max(1, strand_resolution / number_of_shells)`), over every layer; and
+/// every layer tests every segment.
+pub fn bake_work(scene: &Scene) -> u64 {
+    let f = &scene.fur;
+    let side = f64::from(f.texture_resolution) * f64::from(f.supersample);
+    let shells = f64::from(f.number_of_shells);
+    let strands = f64::from(f.number_of_strands);
+    let segments = f64::from(f.strand_resolution);
+    let r = f64::from(f.base_thickness);
+    let coverage = strands * std::f64::consts::PI * r * r;
+    let per_layer_segments = (segments / shells).max(1.0);
+    let writes = shells * side * side * coverage * per_layer_segments;
+    let tests = shells * strands * segments;
+    // The fin: one side view of taller strands, about as much as one layer.
+    let fin = side * side * coverage + strands * segments;
+    let total = writes + tests + fin;
+    if total.is_finite() && total < u64::MAX as f64 {
+        total as u64
+    } else {
+        u64::MAX
+    }
+}
+
+/// A render refused because it would need more than a limit allows.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LimitError {
+    /// The memory estimate exceeds the limit.
+    Memory {
+        /// The estimate.
+        estimate: MemoryEstimate,
+        /// The limit, bytes.
+        limit: u64,
+    },
+    /// The bake work exceeds the limit.
+    BakeWork {
+        /// The estimate.
+        work: u64,
+        /// The limit.
+        limit: u64,
+    },
+}
+
+impl fmt::Display for LimitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LimitError::Memory { estimate, limit } => {
+                let (part, bytes) = estimate.largest();
+                write!(
+                    f,
+                    "the render needs about {} of memory, more than the limit of {} (largest part: {part}, {})",
+                    format_bytes(estimate.total()),
+                    format_bytes(*limit),
+                    format_bytes(bytes)
+                )
+            }
+            LimitError::BakeWork { work, limit } => write!(
+                f,
+                "baking the fur needs about {:.3e} texel writes and segment tests, more than the limit of {:.3e} (fur.number_of_strands × fur.base_thickness² × (fur.texture_resolution × fur.supersample)² × fur.number_of_shells)",
+                *work as f64, *limit as f64
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LimitError {}
+
+/// Checks a scene against both budgets; returns the memory estimate when it fits.
+pub fn check(
+    scene: &Scene,
+    mesh: MeshSize,
+    work: &Workload,
+    max_memory: u64,
+    max_bake_work: u64,
+) -> Result<MemoryEstimate, LimitError> {
+    let estimate = estimate_memory(scene, mesh, work);
+    if estimate.total() > max_memory {
+        return Err(LimitError::Memory {
+            estimate,
+            limit: max_memory,
+        });
+    }
+    let bake = bake_work(scene);
+    if bake > max_bake_work {
+        return Err(LimitError::BakeWork {
+            work: bake,
+            limit: max_bake_work,
+        });
+    }
+    Ok(estimate)
+}
+
+/// `1536` → `"1.5 KiB"`; binary units, one decimal.
+pub fn format_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} B")
+    } else {
+        format!("{value:.1} {}", UNITS[unit])
+    }
+}
+
+/// Parses a size: a whole number of bytes with an optional binary suffix `K`, `M`, `G`, `T`
+/// (also written `KiB`, `KB`, …, any case): `"8G"`, `"512MiB"`, `"1048576"`.
+pub fn parse_bytes(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let digits = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
+    let (number, suffix) = t.split_at(digits);
+    let number: u64 = number
+        .parse()
+        .map_err(|_| format!("{text:?} is not a size (a whole number, e.g. 8G, 512M, 1048576)"))?;
+    let shift = match suffix.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        other => {
+            return Err(format!(
+                "{text:?}: unknown unit {other:?} (use K, M, G or T)"
+            ));
+        }
+    };
+    number
+        .checked_mul(1u64 << shift)
+        .ok_or_else(|| format!("{text:?} is too large"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn scene(text: &str) -> Scene {
+        Scene::parse(text, "t.toml", Path::new(".")).expect("valid scene")
+    }
+
+    #[test]
+    fn reference_sized_scenes_fit_easily() {
+        let s = scene("");
+        let size = mesh_size(&s).expect("procedural");
+        assert!(size.triangles > 400 && size.triangles < 600, "{size:?}");
+        let e = estimate_memory(&s, size, &Workload::default());
+        assert!(e.total() < 256 << 20, "{e:?}");
+        assert!(
+            check(
+                &s,
+                size,
+                &Workload::default(),
+                DEFAULT_MAX_MEMORY,
+                DEFAULT_MAX_BAKE_WORK
+            )
+            .is_ok()
+        );
+        assert!(bake_work(&s) < DEFAULT_MAX_BAKE_WORK / 100);
+    }
+
+    #[test]
+    fn huge_scenes_are_refused_naming_the_largest_part() {
+        let s =
+            scene("[fur]\nnumber_of_shells = 256\ntexture_resolution = 2048\nsupersample = 4\n");
+        let size = mesh_size(&s).expect("procedural");
+        let err = check(
+            &s,
+            size,
+            &Workload {
+                threads: 16,
+                ..Workload::default()
+            },
+            DEFAULT_MAX_MEMORY,
+            u64::MAX,
+        )
+        .unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("more than the limit of 8.0 GiB"), "{msg}");
+        assert!(
+            msg.contains("bake grids") || msg.contains("shell textures"),
+            "{msg}"
+        );
+        // Many frames kept for a GIF of a big image.
+        let s = scene("[image]\nwidth = 4096\nheight = 4096\n");
+        let work = Workload {
+            frames: 2000,
+            keep_frames: true,
+            threads: 1,
+        };
+        let err = check(
+            &s,
+            mesh_size(&s).unwrap(),
+            &work,
+            DEFAULT_MAX_MEMORY,
+            u64::MAX,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("animation frames"), "{err}");
+        // Thick strands by the million: memory is small, the bake would take days.
+        let s = scene(
+            "[fur]\nnumber_of_strands = 1000000\nbase_thickness = 0.2\ntexture_resolution = 1024\n",
+        );
+        let err = check(
+            &s,
+            mesh_size(&s).unwrap(),
+            &Workload::default(),
+            u64::MAX,
+            DEFAULT_MAX_BAKE_WORK,
+        )
+        .unwrap_err();
+        assert!(matches!(err, LimitError::BakeWork { .. }), "{err}");
+    }
+
+    #[test]
+    fn sizes_parse_and_print() {
+        assert_eq!(parse_bytes("8G"), Ok(8 << 30));
+        assert_eq!(parse_bytes("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_bytes("1048576"), Ok(1 << 20));
+        assert_eq!(parse_bytes(" 2 t "), Ok(2 << 40));
+        assert!(parse_bytes("").is_err());
+        assert!(parse_bytes("-1G").is_err());
+        assert!(parse_bytes("8X").is_err());
+        assert!(parse_bytes("99999999999999999999").is_err());
+        assert!(parse_bytes("20000000T").is_err());
+        assert_eq!(format_bytes(1536), "1.5 KiB");
+        assert_eq!(format_bytes(8 << 30), "8.0 GiB");
+        assert_eq!(format_bytes(12), "12 B");
+    }
+}

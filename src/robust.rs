@@ -1,0 +1,170 @@
+//! Robustness checks shared by the fuzz targets (`fuzz/`, cargo-fuzz, nightly features) and the
+//! property tests (`tests/robustness.rs`, fixed seeds, run by `cargo test`): each function takes
+//! arbitrary input, pushes it through one input path of the pipeline, and panics only when an
+//! invariant breaks. Refusing bad input with an error is the expected outcome, never a failure.
+//!
+//! - [`scene_text`]: the scene parser and validator, then the resource estimates.
+//! - [`obj_bytes`]: the OBJ loader (line scan, tobj, merge, box projection), tangent frames,
+//!   shell extrusion and fin edges. Invariant: every loaded vertex is finite with a unit normal
+//!   and an orthonormal frame; extruded shells and silhouette fins are finite.
+//! - [`triangle`]: clipping, triangle setup, binning and rasterization of one triangle with
+//!   arbitrary clip coordinates (NaN, infinities, 1e30, crossing the camera plane). Invariant:
+//!   set-up bounds lie inside the viewport and the float framebuffer holds no NaN.
+
+use crate::limits::{self, MeshSize, Workload};
+use crate::mesh::{self, FinWindows, Mesh};
+use crate::raster::{
+    BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Frame, Framebuffer, clip, setup,
+};
+use crate::scene::Scene;
+use glam::{Vec3, Vec4};
+use std::path::Path;
+
+/// Parses and validates `text` as a scene; when it is accepted, estimates its memory and bake
+/// work (which must not overflow or panic) and checks that it validates again.
+pub fn scene_text(text: &str) {
+    let Ok(scene) = Scene::parse(text, "fuzz.toml", Path::new(".")) else {
+        return;
+    };
+    scene
+        .revalidate("fuzz.toml")
+        .expect("a parsed scene validates again");
+    let size = match limits::mesh_size(&scene) {
+        Ok(size) => size,
+        // OBJ scenes name files that do not exist here.
+        Err(_) => MeshSize {
+            triangles: 1,
+            vertices: 3,
+            file_attributes: 0,
+        },
+    };
+    let estimate = limits::estimate_memory(&scene, size, &Workload::default());
+    assert!(estimate.total() > 0);
+    let _ = limits::bake_work(&scene);
+}
+
+/// Checks the invariants every mesh must hold (see the module docs); panics naming the first
+/// vertex that breaks one.
+pub fn check_mesh(mesh: &Mesh) {
+    mesh.validate().expect("indices in range");
+    for (i, v) in mesh.vertices.iter().enumerate() {
+        assert!(v.position.is_finite(), "vertex {i}: position {v:?}");
+        assert!(v.uv.is_finite(), "vertex {i}: uv {v:?}");
+        assert!(
+            v.dpdu.is_finite() && v.dpdv.is_finite(),
+            "vertex {i}: {v:?}"
+        );
+        let f = v.frame;
+        for (name, axis) in [
+            ("normal", v.normal),
+            ("tangent", f.tangent),
+            ("binormal", f.binormal),
+        ] {
+            assert!(
+                axis.is_finite() && (axis.length() - 1.0).abs() < 1e-3,
+                "vertex {i}: {name} is not a unit vector: {v:?}"
+            );
+        }
+        assert!(
+            f.tangent.dot(f.normal).abs() < 1e-3 && f.binormal.dot(f.normal).abs() < 1e-3,
+            "vertex {i}: frame not orthogonal: {v:?}"
+        );
+    }
+}
+
+/// Loads `bytes` as an OBJ file; when it is accepted, checks the mesh ([`check_mesh`]), extrudes
+/// shells and selects fin edges from a few eyes, all of which must stay finite.
+pub fn obj_bytes(bytes: &[u8]) {
+    let Ok(loaded) = mesh::load_obj_bytes(bytes, Path::new("fuzz.obj")) else {
+        return;
+    };
+    check_mesh(&loaded.mesh);
+    shells_and_fins(&loaded.mesh);
+}
+
+/// Shell extrusion at a few offsets and fin selection from a few eyes: all finite.
+pub fn shells_and_fins(mesh: &Mesh) {
+    for offset in [0.0, 0.37, 10.0] {
+        for (i, p) in mesh::extrude(mesh, offset).iter().enumerate() {
+            assert!(p.is_finite(), "shell at {offset}: vertex {i} at {p}");
+        }
+    }
+    let edges = mesh::edges(mesh);
+    let windows = FinWindows {
+        windows: vec![(70.0, 110.0), (160.0, 200.0)],
+    };
+    for eye in [Vec3::new(0.0, 2.0, 9.0), Vec3::ZERO, Vec3::splat(1e30)] {
+        for e in mesh::silhouette_edges(mesh, &edges, eye, &windows) {
+            let edge = &edges[e];
+            assert!(
+                edge.vertices
+                    .iter()
+                    .all(|&v| (v as usize) < mesh.vertices.len())
+            );
+        }
+    }
+}
+
+/// Side of the framebuffer [`triangle`] rasterizes into.
+const RASTER_SIZE: (u32, u32) = (40, 24);
+
+/// Clips and sets up the triangle `clip` (clip-space positions) for a `width`×`height`
+/// viewport and checks its bounds; then draws it, blended and depth-tested, into a small
+/// framebuffer with its clip coordinates as varyings and checks that no pixel became NaN.
+pub fn triangle(clip: [Vec4; 3], width: u32, height: u32, cull: CullMode) {
+    let width = width.clamp(1, setup::MAX_DIMENSION);
+    let height = height.clamp(1, setup::MAX_DIMENSION);
+    let vertices = clip.map(|position| ClipVertex {
+        position,
+        varyings: (),
+    });
+    // Setup alone, unclipped: refuses what is outside the guard band, never overflows.
+    if let Some((s, _)) = setup::setup_triangle(&vertices, width, height, cull) {
+        let b = s.bounds;
+        assert!(b.x1 <= width && b.y1 <= height, "{b:?}");
+    }
+    clip::clip_triangle(vertices, |t| {
+        for v in &t {
+            let p = v.position;
+            assert!(p.is_finite() && p.w > 0.0, "clipped vertex {p}");
+        }
+        if let Some((s, _)) = setup::setup_triangle(&t, width, height, cull) {
+            let b = s.bounds;
+            assert!(
+                b.x0 < b.x1 && b.x1 <= width && b.y0 < b.y1 && b.y1 <= height,
+                "{b:?}"
+            );
+            assert!(s.inv_area.is_finite() && s.inv_area > 0.0);
+        }
+    });
+
+    let (w, h) = RASTER_SIZE;
+    let mut fb = Framebuffer::new(w, h, 8, Vec4::new(0.1, 0.2, 0.3, 1.0)).expect("framebuffer");
+    let mut frame = Frame::new(&mut fb);
+    let state = DrawState {
+        depth_compare: DepthCompare::LessEqual,
+        depth_write: true,
+        blend: BlendMode::Alpha,
+        cull,
+    };
+    let draw = frame.draw(
+        &clip,
+        &[[0, 1, 2], [2, 1, 0]],
+        state,
+        |p: &Vec4| ClipVertex {
+            position: *p,
+            varyings: [p.x, p.y, p.z, p.w],
+        },
+        |f| {
+            let [x, y, z, w] = *f.varyings();
+            // A colour from the interpolated varyings, bounded so only NaN can escape.
+            let c = Vec4::new(x, y, z, w).clamp(Vec4::splat(-1e6), Vec4::splat(1e6));
+            Some(Vec4::new(c.x.fract(), c.y.fract(), c.z.fract(), 0.5))
+        },
+    );
+    draw.expect("indices in range");
+    frame.finish();
+    for (i, c) in fb.to_rgba_f32().iter().enumerate() {
+        assert!(!c.is_nan(), "pixel {i} is {c}");
+    }
+}

@@ -1,0 +1,216 @@
+//! Bad input through the real binary: every scene in `tests/malformed/` (some pointing at the
+//! broken meshes and material libraries in `tests/malformed/meshes/`) and a list of bad command
+//! lines must exit with status 2 and one line on stderr naming the file (and line and key, or
+//! the argument), quickly, without a panic and without writing an output.
+//!
+//! Each scene's first line says what its message must contain: `# expect: TEXT`. Add a case by
+//! adding a file; nothing here needs to change.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// A refused input must be refused well within this (the huge ones before allocating).
+const QUICK: Duration = Duration::from_secs(5);
+
+fn corpus() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("malformed-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn pelage(args: &[&str]) -> (Output, Duration) {
+    let start = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(args)
+        .output()
+        .expect("pelage runs");
+    (out, start.elapsed())
+}
+
+/// The contract for refused input; returns a description of the first breach.
+fn check_refusal(what: &str, out: &Output, took: Duration, expect: &str) -> Result<(), String> {
+    let err = String::from_utf8_lossy(&out.stderr);
+    let problem = if out.status.code() != Some(2) {
+        Some(format!("exit status {:?}, expected 2", out.status.code()))
+    } else if err.contains("panicked") || err.contains("internal error") {
+        Some("a panic".into())
+    } else if err.trim_end().lines().count() != 1 {
+        Some("more than one line".into())
+    } else if !err.starts_with("error: ") {
+        Some("no `error: ` prefix".into())
+    } else if !err.contains(expect) {
+        Some(format!("no {expect:?}"))
+    } else if took > QUICK {
+        Some(format!("took {took:?}"))
+    } else {
+        None
+    };
+    match problem {
+        Some(p) => Err(format!("{what}: {p}\n    stderr: {}", err.trim_end())),
+        None => Ok(()),
+    }
+}
+
+#[test]
+fn every_malformed_scene_is_refused_with_a_one_line_message() {
+    let out_dir = scratch("scenes");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(corpus())
+        .expect("corpus")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 50, "corpus has {} scenes", scenes.len());
+    let mut failures = Vec::new();
+    for scene in &scenes {
+        let bytes = std::fs::read(scene).expect("read scene");
+        let first = String::from_utf8_lossy(bytes.split(|&b| b == b'\n').next().unwrap_or(&[]))
+            .into_owned();
+        let expect = first
+            .strip_prefix("# expect: ")
+            .unwrap_or_else(|| panic!("{}: first line must be `# expect: TEXT`", scene.display()))
+            .trim()
+            .to_string();
+        let output = out_dir.join("out.png");
+        let (out, took) = pelage(&[
+            "render",
+            scene.to_str().expect("utf-8 path"),
+            "-o",
+            output.to_str().expect("utf-8 path"),
+            "--threads",
+            "2",
+        ]);
+        let name = scene.file_name().expect("name").to_string_lossy();
+        if let Err(e) = check_refusal(&name, &out, took, &expect) {
+            failures.push(e);
+        }
+        if output.exists() {
+            failures.push(format!("{name}: wrote {}", output.display()));
+            let _ = std::fs::remove_file(&output);
+        }
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(&out_dir)
+        .expect("list")
+        .filter_map(Result::ok)
+        .map(|e| e.file_name())
+        .collect();
+    assert!(leftovers.is_empty(), "files left behind: {leftovers:?}");
+    assert!(
+        failures.is_empty(),
+        "{} of {} malformed scenes broke the contract:\n{}",
+        failures.len(),
+        scenes.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn bad_command_lines_are_refused_naming_the_argument() {
+    let dir = scratch("arguments");
+    let png = dir.join("x.png");
+    let png = png.to_str().expect("utf-8 path");
+    let frames = dir.join("frames");
+    let frames = frames.to_str().expect("utf-8 path");
+    let cluttered = dir.join("cluttered");
+    std::fs::create_dir_all(&cluttered).expect("dir");
+    std::fs::write(cluttered.join("notes.txt"), "keep me").expect("write");
+    let cluttered = cluttered.to_str().expect("utf-8 path");
+    let missing_dir = dir.join("no/such/folder/x.png");
+    let missing_dir = missing_dir.to_str().expect("utf-8 path");
+    let d = dir.to_str().expect("utf-8 path");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["render", "--width", "abc", "-o", png], "--width"),
+        (vec!["render", "--width", "-5", "-o", png], "--width"),
+        (vec!["render", "--width", "0", "-o", png], "image.width = 0"),
+        (vec!["render", "--threads", "0", "-o", png], "--threads"),
+        (vec!["render", "--tile", "7", "-o", png], "--tile"),
+        (vec!["render", "--time", "nan", "-o", png], "time"),
+        (vec!["render", "--frobnicate", "-o", png], "--frobnicate"),
+        (vec!["frobnicate"], "frobnicate"),
+        (
+            vec!["render", "--max-memory", "8X", "-o", png],
+            "--max-memory",
+        ),
+        (
+            vec!["render", "--max-memory", "1K", "-o", png],
+            "--max-memory",
+        ),
+        (vec!["render", "--max-work", "-3", "-o", png], "--max-work"),
+        (vec!["render", "--max-work", "10", "-o", png], "--max-work"),
+        (vec!["render", "--frames", "0", "-o", frames], "--frames"),
+        (
+            vec!["render", "--frames", "200000", "-o", frames],
+            "--frames",
+        ),
+        (
+            vec!["render", "--frames", "2", "--fps", "nan", "-o", frames],
+            "--fps",
+        ),
+        (
+            vec!["render", "--frames", "2", "--fps", "0", "-o", frames],
+            "--fps",
+        ),
+        (
+            vec!["render", "--animation", "a.gif", "-o", png],
+            "--frames",
+        ),
+        (vec!["render", "-o", d], "is a folder"),
+        (vec!["render", d, "-o", png], "not a regular file"),
+        (vec!["render", "/dev/null", "-o", png], "/dev/null"),
+        (vec!["render", "-o", missing_dir], "does not exist"),
+        (
+            vec!["render", "--frames", "2", "-o", cluttered],
+            "notes.txt",
+        ),
+        (
+            vec![
+                "render",
+                "--frames",
+                "2",
+                "--animation",
+                missing_dir,
+                "-o",
+                frames,
+            ],
+            "--animation",
+        ),
+        (vec!["bench", "--frames", "0"], "--frames"),
+        (vec!["bench", "--max-memory", "1M"], "--max-memory"),
+    ];
+    let mut failures = Vec::new();
+    for (args, expect) in &cases {
+        let (out, took) = pelage(args);
+        if let Err(e) = check_refusal(&format!("{args:?}"), &out, took, expect) {
+            failures.push(e);
+        }
+    }
+    assert!(
+        !Path::new(png).exists(),
+        "nothing is written for refused input"
+    );
+    assert!(
+        !Path::new(frames).exists(),
+        "no frame folder for refused input"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} bad command lines broke the contract:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn help_and_version_still_succeed() {
+    for args in [["--help"], ["--version"]] {
+        let (out, _) = pelage(&args);
+        assert!(out.status.success(), "{args:?}");
+        assert!(!out.stdout.is_empty(), "{args:?}");
+    }
+}
