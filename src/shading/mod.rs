@@ -15,6 +15,9 @@
 //! | 3.2.4 spots, stripes | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`] | `spots.rs` |
 //! | 3.3 wind | [`wind_force`], [`wind_displacement`], [`wind_uv_offset`], [`bend_tangent`] | `wind.rs` |
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
+//! | beyond: maps | [`layer_within_length`], [`density_alpha`], [`density_band`], [`comb_lean`], [`tint_strand`] | `maps.rs` |
+//! | beyond: gravity, motion | [`gravity_lean`], [`path_position`], [`spring_impulse_response`], [`spring_lag`], [`lean_displacement`] | `motion.rs` |
+//! | beyond: level of detail | [`lod_fur_pixels`], [`lod_shell_level`], [`lod_layer_order`], [`lod_layer_spans`], [`lod_alpha`], [`lod_fin_fade`] | `lod.rs` |
 //!
 //! # Calling a term from your own test
 //! Each term is a plain function, so a GPU port can check its shader line against it:
@@ -70,6 +73,9 @@ mod test_support;
 
 pub mod kajiya_kay;
 pub mod lighting;
+pub mod lod;
+pub mod maps;
+pub mod motion;
 pub mod projection;
 pub mod shadow;
 pub mod spots;
@@ -84,6 +90,15 @@ pub use kajiya_kay::{
 pub use lighting::{
     DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
     dampened_specular, final_colour,
+};
+pub use lod::{
+    lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,
+};
+pub use maps::{
+    DENSITY_BANDS, comb_lean, density_alpha, density_band, layer_within_length, tint_strand,
+};
+pub use motion::{
+    gravity_lean, lean_displacement, path_position, spring_impulse_response, spring_lag,
 };
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
 pub use shadow::{SHADOW_MIN_COS, shadow_change, shadow_lookup_count, shell_shadow};
