@@ -213,6 +213,11 @@ golden! {
     wind => "wind" at times [0.0, 0.5, 1.5],
     burn => "burn" at times [0.0, 1.0, 3.0, 6.0, 10.0],
     distance => "distance" at distances [24.0, 17.0, 12.0, 9.0],
+    painted_length => "painted-length",
+    density => "density",
+    combed => "combed",
+    gravity => "gravity",
+    lod_flyaway => "lod-flyaway" at times [0.0, 0.8, 2.0, 4.0],
 }
 
 #[test]

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::cone::{ConeSegment, FacetTable, GridMap, raster_capsule, strand_cones};
-use super::image::{Rgba8Image, Sample, SampleGrid, downsample};
+use super::image::{Rgba8Image, Sample, SampleGrid, density_bands, downsample};
 use super::params::{FurError, FurParams};
 use super::strand::Strand;
 
@@ -22,6 +22,9 @@ pub struct ShellLayer {
     /// RGB: unit tangent `t` encoded as `unorm8(t·0.5 + 0.5)` in tangent space (`x` = texture
     /// `u`, `y` = texture `v`, `z` = up, away from the surface); A: the same alpha as `colour`.
     pub tangent: Rgba8Image,
+    /// With a density map ([`bake_shells_with_density`]): R, G, B, A = the alpha of the
+    /// strands whose density band is at most 0, 1, 2, 3 (so A equals `colour`'s alpha).
+    pub density: Option<Rgba8Image>,
 }
 
 /// All shell layers of one tile, layer 0 at the root.
@@ -72,6 +75,29 @@ pub(crate) fn cones_of(strands: &[Strand], segments: u32) -> (Vec<Vec<ConeSegmen
 /// downsample, `alpha = covered fraction · gaussian_layer_weight(layer_mid_height(i, N), σ)`.
 /// When no strand point is above 0, `H = max_height`.
 pub fn bake_shells(params: &FurParams, strands: &[Strand]) -> Result<ShellTextures, FurError> {
+    bake(params, strands, None)
+}
+
+/// [`bake_shells`] with each layer's density bands too: strand `k` is in band
+/// [`density_band`](crate::shading::density_band)`(seed, k)`, and a layer's `density` image
+/// holds, per texel, the alpha its strands of bands `≤ 0, 1, 2, 3` cover (thesis-free: for
+/// density maps). The colour and tangent maps are those of [`bake_shells`], byte for byte.
+pub fn bake_shells_with_density(
+    params: &FurParams,
+    strands: &[Strand],
+    seed: u32,
+) -> Result<ShellTextures, FurError> {
+    let bands: Vec<u32> = (0..strands.len() as u32)
+        .map(|k| crate::shading::density_band(seed, k))
+        .collect();
+    bake(params, strands, Some(&bands))
+}
+
+fn bake(
+    params: &FurParams,
+    strands: &[Strand],
+    bands: Option<&[u32]>,
+) -> Result<ShellTextures, FurError> {
     params.validate()?;
     let (cones, top) = cones_of(strands, params.strand_resolution);
     let h = if top > 0.0 { top } else { params.max_height };
@@ -95,7 +121,12 @@ pub fn bake_shells(params: &FurParams, strands: &[Strand]) -> Result<ShellTextur
             let grid = rasterise_layer(&cones, &map, &table, z0, z1, i + 1 == n);
             let w = gaussian_layer_weight(layer_mid_height(i, n), params.gaussian_sigma);
             let (colour, tangent) = downsample(&grid, ss, &colours, |_| w, true);
-            ShellLayer { colour, tangent }
+            let density = bands.map(|bands| density_bands(&grid, ss, bands, w));
+            ShellLayer {
+                colour,
+                tangent,
+                density,
+            }
         })
         .collect();
     Ok(ShellTextures {

@@ -201,6 +201,45 @@ pub(crate) fn downsample(
     (colour_img, tangent_img)
 }
 
+/// The density bands of a layer: per output texel and band `j` in 0..4, the covered fraction of
+/// its subsamples whose strand's band (`bands[strand]`) is at most `j`, times `weight`,
+/// quantised like alpha. Band 3 counts every covered subsample, so it equals the colour
+/// image's alpha.
+pub(crate) fn density_bands(
+    grid: &SampleGrid,
+    factor: usize,
+    bands: &[u32],
+    weight: f32,
+) -> Rgba8Image {
+    let w = grid.width / factor;
+    let h = grid.height / factor;
+    let n = (factor * factor) as f32;
+    let mut image = Rgba8Image::new(w as u32, h as u32, [0; 4]);
+    for y in 0..h {
+        for x in 0..w {
+            let mut counts = [0u32; 4];
+            for sy in 0..factor {
+                let row = (y * factor + sy) * grid.width;
+                for sx in 0..factor {
+                    let s = &grid.samples[row + x * factor + sx];
+                    if let Some(&band) = bands.get(s.strand as usize) {
+                        counts[band.min(3) as usize] += 1;
+                    }
+                }
+            }
+            let mut texel = [0u8; 4];
+            let mut cumulative = 0;
+            for (j, count) in counts.iter().enumerate() {
+                cumulative += count;
+                // The same expression as the colour alpha, so band 3 equals it bit for bit.
+                texel[j] = unorm8(cumulative as f32 / n * weight);
+            }
+            image.texels[y * w + x] = texel;
+        }
+    }
+    image
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,6 +286,10 @@ mod tests {
         // Neighbours dilate colour and tangent but stay transparent.
         assert_eq!(c.get(1, 1), Some([255, 128, 0, 0]));
         assert_eq!(t.get(1, 0), Some([255, 128, 128, 0]));
+        // Density bands: strand 0 in band 2 covers 3 of 4 subsamples.
+        let bands = density_bands(&g, 2, &[2], 1.0);
+        assert_eq!(bands.get(0, 0), Some([0, 0, unorm8(0.75), unorm8(0.75)]));
+        assert_eq!(bands.get(1, 1), Some([0, 0, 0, 0]));
         // Nothing at all: the documented constants.
         let empty = SampleGrid::new(2, 2);
         let (c, t) = downsample(&empty, 1, &colours, |_| 1.0, true);

@@ -36,7 +36,10 @@ mod image;
 mod params;
 mod strand;
 
-pub use bake::{ShellLayer, ShellTextures, bake_shells, gaussian_layer_weight, layer_mid_height};
+pub use bake::{
+    ShellLayer, ShellTextures, bake_shells, bake_shells_with_density, gaussian_layer_weight,
+    layer_mid_height,
+};
 pub use fin::{FinTexture, bake_fin, bake_fin_strands};
 pub use image::{
     EMPTY_COLOUR, EMPTY_TANGENT, Rgba8Image, tangent_from_rgb8, tangent_to_rgb8, unorm8,

@@ -51,6 +51,30 @@ pub enum GpuError {
     /// The scene has no mesh to draw or a size the GPU cannot take.
     #[error("GPU: {0}")]
     Scene(String),
+    /// The scene uses a feature the WGSL port does not have yet.
+    #[error(
+        "the GPU backend does not implement {0} yet; render this scene with the CPU oracle (--backend cpu)"
+    )]
+    Unsupported(String),
+}
+
+/// The scene features beyond the thesis that the WGSL port does not draw yet (empty when it
+/// draws the scene completely): surface maps, level of detail, gravity, motion.
+pub fn unsupported_features(scene: &crate::scene::Scene) -> Vec<&'static str> {
+    let mut missing = Vec::new();
+    if !scene.maps.is_empty() {
+        missing.push("[maps]");
+    }
+    if scene.lod.is_some() {
+        missing.push("[lod]");
+    }
+    if scene.gravity.is_some() {
+        missing.push("[gravity]");
+    }
+    if scene.motion.is_some() {
+        missing.push("[motion]");
+    }
+    missing
 }
 
 /// Which adapter to use.
@@ -137,6 +161,10 @@ impl GpuContext {
         time: f32,
         options: &GpuOptions,
     ) -> Result<RgbaImage, GpuError> {
+        let missing = unsupported_features(prepared.scene());
+        if !missing.is_empty() {
+            return Err(GpuError::Unsupported(missing.join(", ")));
+        }
         let guard = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = self.render_inner(prepared, time, options);
         let scope = pollster::block_on(guard.pop());

@@ -12,6 +12,7 @@
 //!    the mip level nearest the level of detail, along the shadow offset plus the wind's;
 //! 7. Kajiya–Kay diffuse and specular, the dampened specular, and eq. 3.7.
 
+use super::maps::SurfaceMaps;
 use crate::raster::texture::level_of_detail;
 use crate::raster::{Fragment, Sampler, Texture, Varyings};
 use crate::scene::{DebugView, Scene, SpotKind};
@@ -43,6 +44,13 @@ pub struct FurVaryings {
     pub wind_uv: Vec2,
     /// The wind vector (direction × force) in tangent space.
     pub wind: Vec3,
+    /// Mesh uv of the skin point (where the surface maps are read).
+    pub mesh_uv: Vec2,
+    /// The length map's value at the vertices (1 without one), interpolated: the vertex stage
+    /// scaled the layer's height by it.
+    pub length: f32,
+    /// The lean of gravity, the object's motion and combing (tangent space; zero without them).
+    pub lean: Vec3,
 }
 
 impl Varyings for FurVaryings {
@@ -58,6 +66,9 @@ impl Varyings for FurVaryings {
             normal: Vec3::weighted_sum(&a.normal, wa, &b.normal, wb, &c.normal, wc),
             wind_uv: Vec2::weighted_sum(&a.wind_uv, wa, &b.wind_uv, wb, &c.wind_uv, wc),
             wind: Vec3::weighted_sum(&a.wind, wa, &b.wind, wb, &c.wind, wc),
+            mesh_uv: Vec2::weighted_sum(&a.mesh_uv, wa, &b.mesh_uv, wb, &c.mesh_uv, wc),
+            length: f32::weighted_sum(&a.length, wa, &b.length, wb, &c.length, wc),
+            lean: Vec3::weighted_sum(&a.lean, wa, &b.lean, wb, &c.lean, wc),
         }
     }
 }
@@ -228,6 +239,8 @@ pub struct ShadeParams {
     pub burn: Option<BurnState>,
     /// How much of the wind the tangents take at the tips.
     pub wind_tangent_fraction: f32,
+    /// Whether a lean (gravity, motion, combing) bends the tangents.
+    pub lean: bool,
 }
 
 /// What differs between the layers of one frame.
@@ -241,6 +254,9 @@ pub struct LayerParams {
     pub lookups: u32,
     /// `index / number_of_shells`: how far up the strand this layer is.
     pub height_fraction: f32,
+    /// How many baked layers this one stands for under level of detail (1 without it): its
+    /// alpha becomes `1 − (1 − α)^span` ([`shading::lod_alpha`]).
+    pub lod_span: f32,
 }
 
 impl ShadeParams {
@@ -315,6 +331,7 @@ impl ShadeParams {
             spots,
             burn,
             wind_tangent_fraction: s.wind.as_ref().map_or(0.0, |w| w.tangent_fraction),
+            lean: s.gravity.is_some() || s.motion.is_some() || s.maps.direction.is_some(),
         }
     }
 
@@ -328,13 +345,36 @@ impl ShadeParams {
     }
 }
 
+/// The textures one fur layer reads.
+#[derive(Clone, Copy)]
+pub struct LayerMaps<'a> {
+    /// Colour and alpha.
+    pub colour: &'a Texture,
+    /// Encoded tangents.
+    pub tangent: &'a Texture,
+    /// Density bands (shells with a density map); `None` on fins, whose alpha the density
+    /// scales instead.
+    pub density: Option<&'a Texture>,
+    /// How they are filtered.
+    pub sampler: Sampler,
+    /// A shell layer (true) or the fins (false).
+    pub shell: bool,
+}
+
 /// Shades one fur fragment of a shell (or fin) layer; `None` discards it.
+///
+/// Beyond the thesis, in this order: a shell layer above the painted length is dropped
+/// ([`shading::layer_within_length`]; fins are not cut, their height follows the length at
+/// their corners); the density map selects strands through the density bands
+/// ([`shading::density_alpha`]), on fins it scales the alpha; level of detail compensates the
+/// alpha of a layer standing for several ([`shading::lod_alpha`]); the colour map tints the
+/// strand colour before spots ([`shading::tint_strand`]); the lean bends the tangent after the
+/// wind.
 #[inline]
 pub fn shade_fur(
     f: &Fragment<FurVaryings>,
-    colour_map: &Texture,
-    tangent_map: &Texture,
-    sampler: Sampler,
+    textures: LayerMaps<'_>,
+    maps: &SurfaceMaps,
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Option<Vec4> {
@@ -343,11 +383,33 @@ pub fn shade_fur(
     if burn == BurnOutcome::Burnt {
         return None;
     }
+    if textures.shell
+        && let Some(length_map) = &maps.length
+        && !shading::layer_within_length(
+            layer.height_fraction,
+            v.length,
+            maps.sample(length_map, v.mesh_uv).x,
+        )
+    {
+        return None;
+    }
+    let LayerMaps {
+        colour: colour_map,
+        tangent: tangent_map,
+        sampler,
+        ..
+    } = textures;
     let uv = v.uv - v.wind_uv;
     let (ddx, ddy) = f.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, colour_map.width(), colour_map.height());
     let (texel, encoded) = sampler.sample_level_pair(colour_map, tangent_map, uv, lod);
-    let alpha = texel.w * v.fade;
+    let density = maps.density.as_ref().map(|m| maps.sample(m, v.mesh_uv).x);
+    let coverage = match (density, textures.density) {
+        (Some(d), Some(bands)) => shading::density_alpha(sampler.sample_level(bands, uv, lod), d),
+        (Some(d), None) => texel.w * d.clamp(0.0, 1.0),
+        (None, _) => texel.w,
+    };
+    let alpha = shading::lod_alpha(coverage * v.fade, layer.lod_span);
     // NaN alpha is discarded too.
     if alpha.is_nan() || alpha < ALPHA_DISCARD {
         return None;
@@ -359,6 +421,9 @@ pub fn shade_fur(
         return Some(Vec4::new(1.0, 1.0, 1.0, alpha));
     }
     let mut strand = texel.truncate();
+    if let Some(tint) = &maps.colour {
+        strand = shading::tint_strand(strand, maps.sample(tint, v.mesh_uv).truncate());
+    }
     for spot in &p.spots {
         let (colour, weight) = spot.weight_at(v.object, v.normal);
         strand = shading::apply_spot(strand, colour, weight);
@@ -374,16 +439,22 @@ pub fn shade_fur(
     } else {
         tangent
     };
+    let tangent = if p.lean {
+        shading::bend_tangent(tangent, v.lean, layer.height_fraction)
+    } else {
+        tangent
+    };
     let light = v.light.normalize_or_zero();
     let eye = v.eye.normalize_or_zero();
     // The thesis checks "if the according pixel is transparent": one texel per lookup. Wind
     // moves the fur above this layer further, so its displacement adds to the lookup (3.3.1).
-    let shadow = shading::shell_shadow(
-        |at| sampler.sample_nearest_level(colour_map, at, lod).w,
-        uv,
-        v.shadow + v.wind_uv,
-        layer.lookups,
-    );
+    let covered_at = |at: Vec2| match (density, textures.density) {
+        (Some(d), Some(bands)) => {
+            shading::density_alpha(sampler.sample_nearest_level(bands, at, lod), d)
+        }
+        _ => sampler.sample_nearest_level(colour_map, at, lod).w,
+    };
+    let shadow = shading::shell_shadow(covered_at, uv, v.shadow + v.wind_uv, layer.lookups);
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
         return Some(Vec4::new(g, g, g, alpha));

@@ -13,6 +13,7 @@
 //! - All texture reads of one fragment use the level of detail of the fur uv's derivatives.
 
 pub mod fragment;
+pub mod maps;
 
 use crate::camera::Camera;
 use crate::fur::{self, FurParams};
@@ -22,8 +23,9 @@ use crate::raster::{
     Framebuffer, RasterError, RasterStats, Sampler, Texture,
 };
 use crate::scene::{MeshKind, Scene, ShellSpacingSetting};
-use fragment::{FurVaryings, LayerParams, ShadeParams};
+use fragment::{FurVaryings, LayerMaps, LayerParams, ShadeParams};
 use glam::{Vec2, Vec3, Vec4};
+use maps::SurfaceMaps;
 
 /// What can go wrong preparing or drawing a scene.
 #[derive(Debug, thiserror::Error)]
@@ -37,6 +39,9 @@ pub enum RenderError {
     /// The rasterizer refused a size or a draw.
     #[error("raster: {0}")]
     Raster(#[from] RasterError),
+    /// A surface map could not be loaded.
+    #[error(transparent)]
+    Map(#[from] maps::MapError),
 }
 
 impl RenderError {
@@ -50,14 +55,31 @@ impl RenderError {
 struct LayerTextures {
     colour: Texture,
     tangent: Texture,
+    /// Density bands (shells, with a density map).
+    density: Option<Texture>,
+}
+
+fn texture(image: &fur::Rgba8Image) -> Result<Texture, RasterError> {
+    Texture::from_rgba8(image.width, image.height, image.texels.clone())
 }
 
 impl LayerTextures {
     fn new(colour: &fur::Rgba8Image, tangent: &fur::Rgba8Image) -> Result<Self, RasterError> {
         Ok(LayerTextures {
-            colour: Texture::from_rgba8(colour.width, colour.height, colour.texels.clone())?,
-            tangent: Texture::from_rgba8(tangent.width, tangent.height, tangent.texels.clone())?,
+            colour: texture(colour)?,
+            tangent: texture(tangent)?,
+            density: None,
         })
+    }
+
+    fn maps(&self, sampler: Sampler, shell: bool) -> LayerMaps<'_> {
+        LayerMaps {
+            colour: &self.colour,
+            tangent: &self.tangent,
+            density: self.density.as_ref(),
+            sampler,
+            shell,
+        }
     }
 }
 
@@ -87,6 +109,121 @@ pub struct PreparedScene {
     fin: Option<LayerTextures>,
     fin_height: f32,
     tile_world_size: Vec2,
+    maps: SurfaceMaps,
+    /// Centre and radius of the mesh's bounding sphere, object space (level of detail).
+    bounds: (Vec3, f32),
+    /// The order level of detail adds layers in.
+    lod_order: Vec<u32>,
+}
+
+/// What bends the fur in one frame: the wind (thesis 3.3) and the lean of gravity, the object's
+/// motion and combing ([`crate::shading::motion`]).
+#[derive(Clone, Copy, Debug)]
+struct Bending {
+    /// Unit wind direction and force.
+    wind: Option<(Vec3, f32)>,
+    /// The lean shared by every vertex (gravity + spring lag × response), world space; `None`
+    /// when the scene has neither gravity, motion nor a direction map (the thesis's wind alone).
+    lean: Option<Vec3>,
+}
+
+impl Bending {
+    fn at(s: &Scene, time: f32) -> Bending {
+        let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
+        let lean =
+            (s.gravity.is_some() || s.motion.is_some() || s.maps.direction.is_some()).then(|| {
+                let gravity = s.gravity.as_ref().map_or(Vec3::ZERO, |g| {
+                    crate::shading::gravity_lean(g.direction, g.strength)
+                });
+                let lag = s.motion.as_ref().map_or(Vec3::ZERO, |m| {
+                    crate::shading::spring_lag(&m.path, time, m.frequency, m.damping) * m.response
+                });
+                gravity + lag
+            });
+        Bending { wind, lean }
+    }
+
+    /// Whether anything moves the layers (the reverse lookup is needed).
+    fn moves(&self) -> bool {
+        self.wind.is_some() || self.lean.is_some()
+    }
+
+    /// The lean at a vertex (shared lean + combing), world space; zero without a lean.
+    fn lean_at(&self, maps: &SurfaceMaps, v: &mesh::Vertex) -> Vec3 {
+        let Some(shared) = self.lean else {
+            return Vec3::ZERO;
+        };
+        let comb = maps.direction.as_ref().map_or(Vec3::ZERO, |m| {
+            let c = crate::shading::comb_lean(maps.sample(m, v.uv));
+            v.frame.tangent * c.x + v.frame.binormal * c.y
+        });
+        shared + comb
+    }
+
+    /// Displacement of a layer at `fraction` of a strand `height` long at this vertex: the
+    /// thesis's wind alone ([`crate::shading::wind_displacement`]), or the wind's bend added
+    /// to the lean ([`crate::shading::lean_displacement`]).
+    fn displacement(
+        &self,
+        maps: &SurfaceMaps,
+        v: &mesh::Vertex,
+        fraction: f32,
+        height: f32,
+    ) -> Vec3 {
+        match (self.lean, self.wind) {
+            (None, Some((direction, force))) => {
+                crate::shading::wind_displacement(direction, v.normal, force, fraction, height)
+            }
+            (None, None) => Vec3::ZERO,
+            (Some(_), wind) => {
+                let wind_bend = wind.map_or(Vec3::ZERO, |(d, f)| {
+                    let f = if f.is_finite() {
+                        f.clamp(-1.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    d * f
+                });
+                crate::shading::lean_displacement(
+                    wind_bend + self.lean_at(maps, v),
+                    v.normal,
+                    fraction,
+                    height,
+                )
+            }
+        }
+    }
+}
+
+/// The level of detail of one frame ([`crate::shading::lod`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelOfDetail {
+    /// The fur's height on screen at the object's bounding sphere, pixels.
+    pub fur_pixels: f32,
+    /// The continuous number of shells.
+    pub level: f32,
+    /// Per layer, how many baked layers it stands for (0: not drawn).
+    pub spans: Vec<f32>,
+    /// Opacity factor of the fins.
+    pub fin_fade: f32,
+}
+
+/// Centre of the bounding box and the largest distance from it to a vertex.
+fn bounding_sphere(mesh: &Mesh) -> (Vec3, f32) {
+    let (lo, hi) = mesh.vertices.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v.position), hi.max(v.position)),
+    );
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (Vec3::ZERO, 0.0);
+    }
+    let centre = (lo + hi) * 0.5;
+    let radius = mesh
+        .vertices
+        .iter()
+        .map(|v| (v.position - centre).length())
+        .fold(0.0f32, f32::max);
+    (centre, radius)
 }
 
 /// How opaque a fin is at a vertex: the angle between the eye vector and the normal, placed in
@@ -204,13 +341,23 @@ impl PreparedScene {
         let (mesh, warnings) = build_mesh(scene)?;
         let tile = tile_world_size(&mesh, scene.fur.texture_repeat);
         let params = fur_params(scene, tile);
+        let maps = SurfaceMaps::load(&scene.maps, &scene.base_dir)?;
         let strands = fur::generate_strands(&params, scene.seed)?;
-        let baked = fur::bake_shells(&params, &strands)?;
+        let baked = if maps.density.is_some() {
+            fur::bake_shells_with_density(&params, &strands, scene.seed)?
+        } else {
+            fur::bake_shells(&params, &strands)?
+        };
         let shells = baked
             .layers
             .iter()
-            .map(|l| LayerTextures::new(&l.colour, &l.tangent))
-            .collect::<Result<Vec<_>, _>>()?;
+            .map(|l| {
+                Ok(LayerTextures {
+                    density: l.density.as_ref().map(texture).transpose()?,
+                    ..LayerTextures::new(&l.colour, &l.tangent)?
+                })
+            })
+            .collect::<Result<Vec<_>, RasterError>>()?;
         let spacing = match scene.fur.shell_spacing {
             ShellSpacingSetting::Uniform => mesh::shells::ShellSpacing::Uniform,
             ShellSpacingSetting::DenserNearTip => mesh::shells::ShellSpacing::DenserNearTip,
@@ -233,6 +380,7 @@ impl PreparedScene {
         let edges = mesh::fins::edges(&mesh);
         Ok(PreparedScene {
             scene: scene.clone(),
+            bounds: bounding_sphere(&mesh),
             mesh,
             edges,
             warnings,
@@ -241,6 +389,8 @@ impl PreparedScene {
             fin,
             fin_height,
             tile_world_size: tile,
+            lod_order: crate::shading::lod_layer_order(n),
+            maps,
         })
     }
 
@@ -282,9 +432,21 @@ impl PreparedScene {
         let repeat = Vec2::from(s.fur.texture_repeat);
         let shade = ShadeParams::from_scene(s, time);
         let shade = &shade;
-        let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
+        let bending = Bending::at(s, time);
+        let wind = bending.wind;
+        // The object's offset on its path (`None` at rest: positions are left untouched).
+        let moved = s
+            .motion
+            .as_ref()
+            .map(|m| crate::shading::path_position(&m.path, time));
+        let place = move |p: Vec3| match moved {
+            Some(offset) => p + offset,
+            None => p,
+        };
+        let maps = &self.maps;
         let n = s.fur.number_of_shells;
         let max_shell = n - 1;
+        let lod = self.level_of_detail(s, moved.unwrap_or(Vec3::ZERO));
         let mut frame = Frame::new(&mut fb);
 
         // The skin: opaque, writes depth; charred where the fur burns.
@@ -295,6 +457,7 @@ impl PreparedScene {
             max_shell,
             lookups: 0,
             height_fraction: 0.0,
+            lod_span: 1.0,
         };
         frame.draw(
             &self.mesh.vertices,
@@ -304,7 +467,7 @@ impl PreparedScene {
                 ..DrawState::default()
             },
             |v: &mesh::Vertex| ClipVertex {
-                position: view_proj * v.position.extend(1.0),
+                position: view_proj * place(v.position).extend(1.0),
                 varyings: v.normal,
             },
             move |f| {
@@ -334,12 +497,17 @@ impl PreparedScene {
         let difference = s.fur.model_difference;
         let eye = camera.eye;
         for (i, textures) in self.shells.iter().enumerate() {
+            let lod_span = lod.as_ref().map_or(1.0, |l| l.spans[i]);
+            if lod_span <= 0.0 {
+                continue;
+            }
             let offset = self.shell_offsets[i];
             let layer = LayerParams {
                 index: i as u32,
                 max_shell,
                 lookups: crate::shading::shadow_lookup_count(n, i as u32, s.shading.shadow_divisor),
                 height_fraction: i as f32 / n as f32,
+                lod_span,
             };
             // Triangles whose fur is surely burnt away on this layer are not drawn at all: the
             // image is the same, and burnt fur costs nothing (thesis table 4.6).
@@ -349,34 +517,39 @@ impl PreparedScene {
                 kept.as_deref().unwrap_or(&self.mesh.indices),
                 blended,
                 move |v: &mesh::Vertex| {
-                    // Wind (thesis 3.3): the layer moves with the wind's surface-tangent part,
-                    // more the higher it is, pulled back along −n so the strand keeps its length.
-                    let (displacement, wind_uv, wind_ts) = match wind {
-                        Some((direction, force)) => {
-                            let d = crate::shading::wind_displacement(
-                                direction,
-                                v.normal,
-                                force,
-                                layer.height_fraction,
-                                difference,
-                            );
-                            let uv = crate::shading::wind_uv_offset(
-                                d,
-                                v.normal,
-                                v.dpdu / repeat.x,
-                                v.dpdv / repeat.y,
-                            );
-                            (
-                                d,
-                                uv,
-                                crate::shading::to_tangent_space(direction * force, &v.frame),
-                            )
-                        }
-                        None => (Vec3::ZERO, Vec2::ZERO, Vec3::ZERO),
+                    // A length map scales the layer's height above the skin (1 without one).
+                    let length = maps.length_at(v.uv);
+                    let strand_height = difference * length;
+                    let offset = offset * length;
+                    // Wind (thesis 3.3) and lean: the layer moves with their part tangent to
+                    // the surface, more the higher it is, pulled back along −n so the strand
+                    // keeps its length.
+                    let displacement =
+                        bending.displacement(maps, v, layer.height_fraction, strand_height);
+                    let wind_uv = if bending.moves() {
+                        crate::shading::wind_uv_offset(
+                            displacement,
+                            v.normal,
+                            v.dpdu / repeat.x,
+                            v.dpdv / repeat.y,
+                        )
+                    } else {
+                        Vec2::ZERO
                     };
-                    let p = v.position + v.normal * offset + displacement;
-                    let change =
-                        crate::shading::shadow_change(light, v.frame.normal, difference - offset);
+                    let wind_ts = wind.map_or(Vec3::ZERO, |(direction, force)| {
+                        crate::shading::to_tangent_space(direction * force, &v.frame)
+                    });
+                    let lean = if bending.lean.is_some() {
+                        crate::shading::to_tangent_space(bending.lean_at(maps, v), &v.frame)
+                    } else {
+                        Vec3::ZERO
+                    };
+                    let p = place(v.position + v.normal * offset + displacement);
+                    let change = crate::shading::shadow_change(
+                        light,
+                        v.frame.normal,
+                        strand_height - offset,
+                    );
                     ClipVertex {
                         position: view_proj * p.extend(1.0),
                         varyings: FurVaryings {
@@ -393,26 +566,26 @@ impl PreparedScene {
                             normal: v.normal,
                             wind_uv,
                             wind: wind_ts,
+                            mesh_uv: v.uv,
+                            length,
+                            lean,
                         },
                     }
                 },
                 move |f| {
-                    fragment::shade_fur(
-                        f,
-                        &textures.colour,
-                        &textures.tangent,
-                        shell_sampler,
-                        &layer,
-                        shade,
-                    )
+                    fragment::shade_fur(f, textures.maps(shell_sampler, true), maps, &layer, shade)
                 },
             )?;
         }
 
         // Fins at the silhouette; they stand for the fur's full height, so they burn as the
         // top shell does.
-        if let Some(fin) = &self.fin {
-            let (vertices, triangles) = self.fin_geometry(camera.eye, light, wind, shade);
+        let fin_fade = lod.as_ref().map(|l| l.fin_fade);
+        if let Some(fin) = &self.fin
+            && fin_fade != Some(0.0)
+        {
+            let (vertices, triangles) =
+                self.fin_geometry(camera.eye, light, bending, shade, moved, fin_fade);
             let fin_sampler = Sampler {
                 address_u: AddressMode::Wrap,
                 address_v: AddressMode::Clamp,
@@ -423,6 +596,7 @@ impl PreparedScene {
                 max_shell,
                 lookups: 0,
                 height_fraction: 1.0,
+                lod_span: 1.0,
             };
             frame.draw(
                 &vertices,
@@ -436,14 +610,7 @@ impl PreparedScene {
                     varyings: v,
                 },
                 move |f| {
-                    fragment::shade_fur(
-                        f,
-                        &fin.colour,
-                        &fin.tangent,
-                        fin_sampler,
-                        &fin_layer,
-                        shade,
-                    )
+                    fragment::shade_fur(f, fin.maps(fin_sampler, false), maps, &fin_layer, shade)
                 },
             )?;
         }
@@ -456,6 +623,45 @@ impl PreparedScene {
             stats,
             warnings: self.warnings.clone(),
         })
+    }
+
+    /// Level of detail for a frame of `s` with the object moved by `moved`: `None` without
+    /// `[lod]`.
+    fn level_of_detail(&self, s: &Scene, moved: Vec3) -> Option<LevelOfDetail> {
+        let lod = s.lod.as_ref()?;
+        let (centre, radius) = self.bounds;
+        // The distance to the nearest point of the bounding sphere: the fur there is the
+        // largest on screen, and it must keep its look.
+        let distance = (s.camera.eye - (centre + moved)).length() - radius;
+        let fur_pixels = crate::shading::lod_fur_pixels(
+            s.fur.model_difference,
+            distance,
+            s.camera.fov_y_deg,
+            s.image.height,
+        );
+        let level = crate::shading::lod_shell_level(
+            fur_pixels,
+            lod.pixels_per_shell,
+            lod.min_shells,
+            s.fur.number_of_shells,
+        );
+        Some(LevelOfDetail {
+            fur_pixels,
+            level,
+            spans: crate::shading::lod_layer_spans(&self.lod_order, level),
+            fin_fade: crate::shading::lod_fin_fade(fur_pixels, lod.fin_fade_pixels),
+        })
+    }
+
+    /// The level of detail a frame of the scene at `time` is drawn with (`None` without
+    /// `[lod]`).
+    pub fn level_of_detail_at(&self, time: f32) -> Option<LevelOfDetail> {
+        let moved = self
+            .scene
+            .motion
+            .as_ref()
+            .map_or(Vec3::ZERO, |m| crate::shading::path_position(&m.path, time));
+        self.level_of_detail(&self.scene, moved)
     }
 
     /// The mesh's triangles minus those whose fur is surely burnt away on `layer`; `None` when
@@ -481,23 +687,30 @@ impl PreparedScene {
         )
     }
 
-    /// Fin quads for this eye: one per silhouette edge, from the skin up to the fin height along
-    /// the vertex normals, the top edge moved by the wind like the top shell. Their frame: x along the edge (texture u), z up the averaged normal
-    /// (texture v), y = z × x.
+    /// Fin quads for this eye: one per silhouette edge, from the skin up to the fin height
+    /// (times the length map at the corner) along the vertex normals, the top edge moved by the
+    /// wind and lean like the top shell, everything moved by the object's path offset. Their
+    /// frame: x along the edge (texture u), z up the averaged normal (texture v), y = z × x.
+    /// `lod_fade` multiplies every corner's fade.
     fn fin_geometry(
         &self,
         eye: Vec3,
         light: Vec3,
-        wind: Option<(Vec3, f32)>,
+        bending: Bending,
         shade: &ShadeParams,
+        moved: Option<Vec3>,
+        lod_fade: Option<f32>,
     ) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
         let top = self.scene.fur.number_of_shells - 1;
-        // The wind bends a fin's top edge as it bends the top shell.
-        let bend = |normal: Vec3| match wind {
-            Some((direction, force)) => {
-                crate::shading::wind_displacement(direction, normal, force, 1.0, self.fin_height)
-            }
-            None => Vec3::ZERO,
+        let maps = &self.maps;
+        let place = |p: Vec3| match moved {
+            Some(offset) => p + offset,
+            None => p,
+        };
+        // Silhouettes are found in object space: the eye as the unmoved object sees it.
+        let object_eye = match moved {
+            Some(offset) => eye - offset,
+            None => eye,
         };
         let windows = mesh::fins::FinWindows {
             windows: self
@@ -508,7 +721,7 @@ impl PreparedScene {
                 .map(|w| (w[0], w[1]))
                 .collect(),
         };
-        let selected = mesh::fins::silhouette_edges(&self.mesh, &self.edges, eye, &windows);
+        let selected = mesh::fins::silhouette_edges(&self.mesh, &self.edges, object_eye, &windows);
         let mut vertices = Vec::with_capacity(selected.len() * 4);
         let mut triangles = Vec::with_capacity(selected.len() * 2);
         for &e in &selected {
@@ -539,29 +752,38 @@ impl PreparedScene {
                 binormal: z.cross(x),
                 normal: z,
             };
+            // The top corner over a skin vertex: the fin height times the painted length,
+            // bent like the top shell.
+            let top_of = |v: &mesh::Vertex| {
+                let length = maps.length_at(v.uv);
+                let height = self.fin_height * length;
+                let rise = if maps.length.is_some() {
+                    v.normal * height
+                } else {
+                    v.normal * self.fin_height
+                };
+                (
+                    v.position + rise + bending.displacement(maps, v, 1.0, height),
+                    length,
+                )
+            };
+            let (a_top, a_length) = top_of(a);
+            let (b_top, b_length) = top_of(b);
             // Each fin starts at its first vertex's fur coordinate, so neighbouring fins do not
             // all show the same strip of the fin texture.
             let repeat = Vec2::from(self.scene.fur.texture_repeat);
             let u0 = (a.uv * repeat).element_sum();
             let u1 = u0 + length / self.tile_world_size.x;
             let corners = [
-                (a.position, a.position, a.normal, Vec2::new(u0, 0.0)),
-                (b.position, b.position, b.normal, Vec2::new(u1, 0.0)),
-                (
-                    b.position + b.normal * self.fin_height + bend(b.normal),
-                    b.position,
-                    b.normal,
-                    Vec2::new(u1, 1.0),
-                ),
-                (
-                    a.position + a.normal * self.fin_height + bend(a.normal),
-                    a.position,
-                    a.normal,
-                    Vec2::new(u0, 1.0),
-                ),
+                (a.position, a, Vec2::new(u0, 0.0), 1.0),
+                (b.position, b, Vec2::new(u1, 0.0), 1.0),
+                (b_top, b, Vec2::new(u1, 1.0), b_length),
+                (a_top, a, Vec2::new(u0, 1.0), a_length),
             ];
             let base = vertices.len() as u32;
-            for (p, root, n, uv) in corners {
+            for (p, root, uv, length) in corners {
+                let p = place(p);
+                let fade = fin_fade(&self.scene.fur.fin_windows, eye - p, root.normal);
                 vertices.push((
                     p,
                     FurVaryings {
@@ -569,11 +791,17 @@ impl PreparedScene {
                         light: crate::shading::to_tangent_space(light, &frame),
                         eye: crate::shading::to_tangent_space(eye - p, &frame),
                         shadow: Vec2::ZERO,
-                        fade: fin_fade(&self.scene.fur.fin_windows, eye - p, n),
-                        object: root,
-                        normal: n,
+                        fade: match lod_fade {
+                            Some(l) => fade * l,
+                            None => fade,
+                        },
+                        object: root.position,
+                        normal: root.normal,
                         wind_uv: Vec2::ZERO,
                         wind: Vec3::ZERO,
+                        mesh_uv: root.uv,
+                        length,
+                        lean: Vec3::ZERO,
                     },
                 ));
             }
@@ -628,6 +856,7 @@ impl PreparedScene {
             max_shell: n - 1,
             lookups: crate::shading::shadow_lookup_count(n, i, s.shading.shadow_divisor),
             height_fraction: i as f32 / n as f32,
+            lod_span: 1.0,
         }
     }
 
@@ -635,13 +864,19 @@ impl PreparedScene {
     /// vertex's object-space position with its fur varyings, and the triangles.
     pub fn fin_quads_at(&self, time: f32) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
         let s = &self.scene;
-        let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
         let shade = ShadeParams::from_scene(s, time);
+        let moved = s
+            .motion
+            .as_ref()
+            .map(|m| crate::shading::path_position(&m.path, time));
+        let lod = self.level_of_detail(s, moved.unwrap_or(Vec3::ZERO));
         self.fin_geometry(
             s.camera.eye,
             s.light.direction.normalize_or_zero(),
-            wind,
+            Bending::at(s, time),
             &shade,
+            moved,
+            lod.map(|l| l.fin_fade),
         )
     }
 }

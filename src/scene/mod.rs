@@ -60,6 +60,15 @@ pub struct Scene {
     pub wind: Option<WindSettings>,
     /// Burning (thesis 3.4); absent means no fire.
     pub burn: Option<BurnSettings>,
+    /// Length, density, direction and colour maps in mesh uv space; absent: uniform fur.
+    #[serde(skip_serializing_if = "MapSettings::is_empty")]
+    pub maps: MapSettings,
+    /// Level of detail by distance; absent: every shell, always.
+    pub lod: Option<LodSettings>,
+    /// Gravity bending the fur at rest; absent: none.
+    pub gravity: Option<GravitySettings>,
+    /// The object moving along a path, its fur lagging on damped springs; absent: at rest.
+    pub motion: Option<MotionSettings>,
     /// Directory relative paths are resolved against (the scene file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -80,6 +89,10 @@ impl Default for Scene {
             stripes: Vec::new(),
             wind: None,
             burn: None,
+            maps: MapSettings::default(),
+            lod: None,
+            gravity: None,
+            motion: None,
             base_dir: PathBuf::from("."),
         }
     }
@@ -555,6 +568,113 @@ impl Default for BurnSettings {
             high_exponent: 200.0,
             low_exponent: 4.0,
             spread_duration: 10.0,
+        }
+    }
+}
+
+/// How a map is addressed outside `[0, 1]` (and between its edge texel centres).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MapAddressSetting {
+    /// Coordinates clamp to the edge texels.
+    #[default]
+    Clamp,
+    /// The map repeats (for uv seams a map must cross, like a torus's).
+    Wrap,
+}
+
+/// `[maps]`: PNG images in mesh uv space (`u` across, `v = 0` on the first row), paths relative
+/// to the scene file. Each is optional; absent means the thesis's uniform fur.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct MapSettings {
+    /// Fur length (red channel, 0..1 of `model_difference`).
+    pub length: Option<PathBuf>,
+    /// Fraction of strands kept (red channel, 0..1).
+    pub density: Option<PathBuf>,
+    /// Combing direction: red, green = tangent-space `u`, `v` components as `c·2 − 1`; the
+    /// vector's length is the lean (sine of the angle); 128, 128 = upright.
+    pub direction: Option<PathBuf>,
+    /// Multiplies the strand colour (RGB).
+    pub colour: Option<PathBuf>,
+    /// Addressing of every map along `u` and `v`.
+    pub address: [MapAddressSetting; 2],
+}
+
+impl MapSettings {
+    /// Whether no map is given.
+    pub fn is_empty(&self) -> bool {
+        self.length.is_none()
+            && self.density.is_none()
+            && self.direction.is_none()
+            && self.colour.is_none()
+    }
+}
+
+/// `[lod]`: fewer shells as the fur gets smaller on screen.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LodSettings {
+    /// Screen height of the fur, pixels, that one drawn shell stands for.
+    pub pixels_per_shell: f32,
+    /// Fewest shells drawn.
+    pub min_shells: u32,
+    /// Fins fade out between these on-screen fur heights, pixels (gone below the first, whole
+    /// above the second).
+    pub fin_fade_pixels: [f32; 2],
+}
+
+impl Default for LodSettings {
+    fn default() -> Self {
+        LodSettings {
+            pixels_per_shell: 1.5,
+            min_shells: 4,
+            fin_fade_pixels: [1.0, 3.0],
+        }
+    }
+}
+
+/// `[gravity]`: bends the fur at rest.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GravitySettings {
+    /// Direction of gravity, world space.
+    pub direction: Vec3,
+    /// Bend where the fur stands at right angles to gravity, as the sine of the bend angle.
+    pub strength: f32,
+}
+
+impl Default for GravitySettings {
+    fn default() -> Self {
+        GravitySettings {
+            direction: Vec3::NEG_Y,
+            strength: 0.4,
+        }
+    }
+}
+
+/// `[motion]`: the object follows a path; its fur tips lag behind on damped springs.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotionSettings {
+    /// Keyframes `[t, x, y, z]`: the object's offset at time `t`, linear in between, held before
+    /// the first and after the last. Times must increase.
+    pub path: Vec<[f32; 4]>,
+    /// Natural frequency of the strands' spring, Hz.
+    pub frequency: f32,
+    /// Damping ratio of the spring (0 < ζ < 1: it swings back past rest and settles).
+    pub damping: f32,
+    /// Tip lag per unit of spring displacement, as a bend (sine of the angle) per world unit.
+    pub response: f32,
+}
+
+impl Default for MotionSettings {
+    fn default() -> Self {
+        MotionSettings {
+            path: Vec::new(),
+            frequency: 1.5,
+            damping: 0.2,
+            response: 1.0,
         }
     }
 }

@@ -308,6 +308,73 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         range_f32("wind.max_bend", w.max_bend, 0.0, 1.0)?;
         range_f32("wind.tangent_fraction", w.tangent_fraction, 0.0, 10.0)?;
     }
+    let maps = &scene.maps;
+    for (key, path) in [
+        ("maps.length", &maps.length),
+        ("maps.density", &maps.density),
+        ("maps.direction", &maps.direction),
+        ("maps.colour", &maps.colour),
+    ] {
+        if path.as_ref().is_some_and(|p| p.as_os_str().is_empty()) {
+            return Err((key.into(), format!("{key} must name a PNG file")));
+        }
+    }
+    if let Some(l) = &scene.lod {
+        range_f32("lod.pixels_per_shell", l.pixels_per_shell, 0.01, 1000.0)?;
+        range_u32("lod.min_shells", l.min_shells, 1, limits.max_shells)?;
+        range_f32(
+            "lod.fin_fade_pixels[0]",
+            l.fin_fade_pixels[0],
+            0.0,
+            10_000.0,
+        )?;
+        range_f32(
+            "lod.fin_fade_pixels[1]",
+            l.fin_fade_pixels[1],
+            0.0,
+            10_000.0,
+        )?;
+        if l.fin_fade_pixels[0] > l.fin_fade_pixels[1] {
+            return Err((
+                "lod.fin_fade_pixels".into(),
+                "lod.fin_fade_pixels: the first value must not exceed the second".into(),
+            ));
+        }
+    }
+    if let Some(g) = &scene.gravity {
+        nonzero("gravity.direction", g.direction)?;
+        range_f32("gravity.strength", g.strength, 0.0, 1.0)?;
+    }
+    if let Some(m) = &scene.motion {
+        if m.path.is_empty() || m.path.len() > 10_000 {
+            return Err((
+                "motion.path".into(),
+                format!(
+                    "motion.path has {} keyframes; it needs 1 to 10000 of [t, x, y, z]",
+                    m.path.len()
+                ),
+            ));
+        }
+        for (k, key) in m.path.iter().enumerate() {
+            let name = format!("motion.path[{k}]");
+            for value in key {
+                range_f32(&name, *value, -1.0e6, 1.0e6)?;
+            }
+            if k > 0 && key[0] <= m.path[k - 1][0] {
+                return Err((
+                    name.clone(),
+                    format!(
+                        "{name}: keyframe times must increase ({} after {})",
+                        key[0],
+                        m.path[k - 1][0]
+                    ),
+                ));
+            }
+        }
+        range_f32("motion.frequency", m.frequency, 0.01, 100.0)?;
+        range_f32("motion.damping", m.damping, 0.01, 0.99)?;
+        range_f32("motion.response", m.response, 0.0, 1000.0)?;
+    }
     if let Some(b) = &scene.burn {
         if b.matches.is_empty() {
             return Err((

@@ -30,7 +30,7 @@ pub fn lod_fur_pixels(
     fov_y_deg: f32,
     image_height: u32,
 ) -> f32 {
-    if !(distance > 0.0) {
+    if distance.is_nan() || distance <= 0.0 {
         return f32::INFINITY;
     }
     let half_fov = 0.5 * fov_y_deg.to_radians();

@@ -32,7 +32,7 @@ pub fn path_position(path: &[[f32; 4]], time: f32) -> Vec3 {
     let (Some(first), Some(last)) = (path.first(), path.last()) else {
         return Vec3::ZERO;
     };
-    if !(time > first[0]) {
+    if time.is_nan() || time <= first[0] {
         return at(first);
     }
     if time >= last[0] {
@@ -53,7 +53,7 @@ pub fn path_position(path: &[[f32; 4]], time: f32) -> Vec3 {
 /// 0.01 Hz. Uses `libm` `expf` and `sinf`.
 #[inline]
 pub fn spring_impulse_response(tau: f32, frequency: f32, damping: f32) -> f32 {
-    if !(tau > 0.0) || !tau.is_finite() {
+    if !tau.is_finite() || tau <= 0.0 {
         return 0.0;
     }
     let zeta = finite_or_zero(damping).clamp(0.01, 0.99);
@@ -78,7 +78,7 @@ pub fn spring_lag(path: &[[f32; 4]], time: f32, frequency: f32, damping: f32) ->
     let mut lag = Vec3::ZERO;
     let mut before = Vec3::ZERO;
     for (k, key) in path.iter().enumerate() {
-        if !(key[0] < time) {
+        if time.is_nan() || key[0] >= time {
             break;
         }
         let after = velocity(k);

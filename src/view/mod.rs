@@ -283,11 +283,14 @@ impl Viewer {
                     scale_into(&frame.image, &mut self.base, self.width, self.height);
                     let now = Instant::now();
                     self.arrivals.push_back(now);
-                    self.shown = Some(Shown { frame, at: now });
+                    self.shown = Some(Shown {
+                        frame: *frame,
+                        at: now,
+                    });
                 }
             }
             Event::Baked(Ok(bake), _) => {
-                self.bake = Some(Arc::new(bake));
+                self.bake = Some(Arc::new(*bake));
                 self.baking = None;
                 self.bake_if_needed()?;
             }

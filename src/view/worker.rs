@@ -67,9 +67,9 @@ impl Frame {
 /// What comes back to the event loop.
 pub enum Event {
     /// A frame is ready.
-    Drawn(Frame),
+    Drawn(Box<Frame>),
     /// A bake finished (or failed), for this scene's seed, mesh and fur.
-    Baked(Result<Bake, String>, Box<Scene>),
+    Baked(Result<Box<Bake>, String>, Box<Scene>),
     /// A screenshot was written (its message) or failed.
     Wrote(Result<String, String>),
     /// A frame failed to draw.
@@ -164,7 +164,7 @@ fn work(slot: &Slot, pool: &ThreadPool, tile: u32, events: &Sender<Event>) {
             let drawn = pool.install(|| job.bake.prepared.render_with(&scene, scene.time, tile));
             let ms = start.elapsed().as_secs_f64() * 1e3;
             let event = match drawn {
-                Ok(image) => Event::Drawn(Frame {
+                Ok(image) => Event::Drawn(Box::new(Frame {
                     id: job.id,
                     step,
                     divisor,
@@ -173,7 +173,7 @@ fn work(slot: &Slot, pool: &ThreadPool, tile: u32, events: &Sender<Event>) {
                     bake: Arc::clone(&job.bake),
                     scene: job.scene.clone(),
                     pace: job.pace,
-                }),
+                })),
                 Err(e) => Event::Failed(e.to_string()),
             };
             if events.send(event).is_err() {
@@ -195,9 +195,11 @@ pub fn spawn_bake(
         .spawn(move || {
             let baked = pool
                 .install(|| PreparedScene::new(&scene))
-                .map(|prepared| Bake {
-                    prepared,
-                    generation,
+                .map(|prepared| {
+                    Box::new(Bake {
+                        prepared,
+                        generation,
+                    })
                 })
                 .map_err(|e| e.to_string());
             let _ = events.send(Event::Baked(baked, Box::new(scene)));

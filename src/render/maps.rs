@@ -1,0 +1,225 @@
+//! Surface maps (length, density, direction, colour): PNG images in mesh uv space, loaded once
+//! and sampled by the vertex and fragment stages.
+//!
+//! Sampling convention (a GPU port must match it): the map's 8-bit texels `c` read as `c/255`;
+//! texel `(i, j)` has its centre at `u = (i + ½)/width`, `v = (j + ½)/height` (row 0 at
+//! `v = 0`, the image's first row); a sample is bilinear between the four nearest texel centres
+//! with the rasterizer's own bilinear filter ([`Sampler`], level 0, no mips), addressed per axis
+//! by `[maps] address` (clamp: coordinates stop at the edge texels; wrap: the map repeats).
+//! At a texel centre the sample is that texel exactly.
+
+use crate::raster::{AddressMode, Filter, Sampler, Texture};
+use crate::scene::{MapAddressSetting, MapSettings};
+use glam::{Vec2, Vec4};
+use std::path::{Path, PathBuf};
+
+/// Largest map side accepted, texels (a map is sampled per vertex and per fragment; finer
+/// than the screen buys nothing).
+pub const MAX_MAP_SIDE: u32 = 8192;
+
+/// A map that could not be loaded.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{key} = {path}: {message}")]
+pub struct MapError {
+    /// The scene key (`maps.length`).
+    pub key: String,
+    /// The file, as resolved.
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// The scene's maps, loaded.
+#[derive(Clone, Debug)]
+pub struct SurfaceMaps {
+    /// Fur length, red channel.
+    pub length: Option<Texture>,
+    /// Fraction of strands kept, red channel.
+    pub density: Option<Texture>,
+    /// Combing direction, red and green.
+    pub direction: Option<Texture>,
+    /// Strand colour multiplier, RGB.
+    pub colour: Option<Texture>,
+    sampler: Sampler,
+}
+
+fn address(setting: MapAddressSetting) -> AddressMode {
+    match setting {
+        MapAddressSetting::Clamp => AddressMode::Clamp,
+        MapAddressSetting::Wrap => AddressMode::Wrap,
+    }
+}
+
+/// Reads a PNG map, checking its size from the header before decoding.
+fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
+    let fail = |message: String| MapError {
+        key: key.to_string(),
+        path: path.display().to_string(),
+        message,
+    };
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| fail(format!("cannot read the map: {e}")))?
+        .with_guessed_format()
+        .map_err(|e| fail(format!("cannot read the map: {e}")))?;
+    if reader.format() != Some(image::ImageFormat::Png) {
+        return Err(fail("not a PNG file".into()));
+    }
+    let (width, height) = reader
+        .into_dimensions()
+        .map_err(|e| fail(format!("not a readable PNG: {e}")))?;
+    if width == 0 || height == 0 || width > MAX_MAP_SIDE || height > MAX_MAP_SIDE {
+        return Err(fail(format!(
+            "the map is {width}×{height}; each side must be 1..={MAX_MAP_SIDE}"
+        )));
+    }
+    let image = image::ImageReader::open(path)
+        .map_err(|e| fail(format!("cannot read the map: {e}")))?
+        .with_guessed_format()
+        .map_err(|e| fail(format!("cannot read the map: {e}")))?
+        .decode()
+        .map_err(|e| fail(format!("not a readable PNG: {e}")))?
+        .to_rgba8();
+    let texels = image.pixels().map(|p| p.0).collect();
+    Texture::from_rgba8(width, height, texels).map_err(|e| fail(e.to_string()))
+}
+
+impl SurfaceMaps {
+    /// Loads the maps named in `settings`, paths relative to `base_dir`.
+    pub fn load(settings: &MapSettings, base_dir: &Path) -> Result<SurfaceMaps, MapError> {
+        let load = |key: &str, path: &Option<PathBuf>| -> Result<Option<Texture>, MapError> {
+            path.as_ref()
+                .map(|p| load_png(key, &base_dir.join(p)))
+                .transpose()
+        };
+        Ok(SurfaceMaps {
+            length: load("maps.length", &settings.length)?,
+            density: load("maps.density", &settings.density)?,
+            direction: load("maps.direction", &settings.direction)?,
+            colour: load("maps.colour", &settings.colour)?,
+            sampler: Sampler {
+                address_u: address(settings.address[0]),
+                address_v: address(settings.address[1]),
+                filter: Filter::Bilinear,
+            },
+        })
+    }
+
+    /// No maps at all (the thesis's uniform fur).
+    pub fn none() -> SurfaceMaps {
+        SurfaceMaps {
+            length: None,
+            density: None,
+            direction: None,
+            colour: None,
+            sampler: Sampler {
+                address_u: AddressMode::Clamp,
+                address_v: AddressMode::Clamp,
+                filter: Filter::Bilinear,
+            },
+        }
+    }
+
+    /// Whether any map is loaded.
+    pub fn any(&self) -> bool {
+        self.length.is_some()
+            || self.density.is_some()
+            || self.direction.is_some()
+            || self.colour.is_some()
+    }
+
+    /// A bilinear sample of `map` at mesh uv `uv` (see the module's convention).
+    #[inline]
+    pub fn sample(&self, map: &Texture, uv: Vec2) -> Vec4 {
+        self.sampler.sample_level(map, uv, 0.0)
+    }
+
+    /// The fur length at `uv` (red channel, 0..1); 1 without a length map.
+    #[inline]
+    pub fn length_at(&self, uv: Vec2) -> f32 {
+        self.length.as_ref().map_or(1.0, |m| self.sample(m, uv).x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map(width: u32, height: u32, texels: &[u8], address: MapAddressSetting) -> SurfaceMaps {
+        let texture = Texture::from_rgba8(
+            width,
+            height,
+            texels.iter().map(|&r| [r, 0, 0, 255]).collect(),
+        )
+        .expect("texture");
+        SurfaceMaps {
+            length: Some(texture),
+            sampler: Sampler {
+                address_u: super::address(address),
+                address_v: super::address(address),
+                filter: Filter::Bilinear,
+            },
+            ..SurfaceMaps::none()
+        }
+    }
+
+    #[test]
+    fn texel_centres_give_the_texel_and_midpoints_the_mean() {
+        let m = map(
+            4,
+            2,
+            &[0, 51, 102, 255, 10, 20, 30, 40],
+            MapAddressSetting::Clamp,
+        );
+        for (i, expected) in [0u8, 51, 102, 255].iter().enumerate() {
+            let uv = Vec2::new((i as f32 + 0.5) / 4.0, 0.25);
+            assert_eq!(m.length_at(uv), f32::from(*expected) / 255.0, "texel {i}");
+        }
+        assert_eq!(m.length_at(Vec2::new(0.625, 0.75)), 30.0 / 255.0);
+        // Halfway between texel centres 1 and 2 of row 0 (u = 0.5): their mean, to f32
+        // rounding; halfway between the rows too: the mean of four.
+        let mid = m.length_at(Vec2::new(0.5, 0.25));
+        assert!((f64::from(mid) - (51.0 + 102.0) / 2.0 / 255.0).abs() < 1e-6);
+        let four = m.length_at(Vec2::new(0.5, 0.5));
+        assert!((f64::from(four) - (51.0 + 102.0 + 20.0 + 30.0) / 4.0 / 255.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn edges_clamp_or_wrap() {
+        let clamp = map(4, 1, &[0, 51, 102, 255], MapAddressSetting::Clamp);
+        // Outside the first and last texel centres a clamped map holds the edge texel.
+        assert_eq!(clamp.length_at(Vec2::new(0.0, 0.5)), 0.0);
+        assert_eq!(clamp.length_at(Vec2::new(-3.0, 0.5)), 0.0);
+        assert_eq!(clamp.length_at(Vec2::new(1.0, 0.5)), 1.0);
+        assert_eq!(clamp.length_at(Vec2::new(7.0, 0.5)), 1.0);
+        let wrap = map(4, 1, &[0, 51, 102, 255], MapAddressSetting::Wrap);
+        // A wrapped map blends the last and first texels across u = 0 (and u = 1).
+        let seam = f64::from(wrap.length_at(Vec2::new(0.0, 0.5)));
+        assert!((seam - 255.0 / 2.0 / 255.0).abs() < 1e-6, "{seam}");
+        assert_eq!(
+            wrap.length_at(Vec2::new(1.0, 0.5)),
+            wrap.length_at(Vec2::new(0.0, 0.5))
+        );
+        assert_eq!(wrap.length_at(Vec2::new(2.125, 0.5)), 0.0);
+    }
+
+    #[test]
+    fn missing_and_foreign_files_are_named() {
+        let dir = std::env::temp_dir().join(format!("pelage-maps-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(dir.join("text.png"), "not a png").expect("write");
+        let settings = MapSettings {
+            density: Some(PathBuf::from("text.png")),
+            ..MapSettings::default()
+        };
+        let e = SurfaceMaps::load(&settings, &dir).expect_err("not a PNG");
+        assert_eq!(e.key, "maps.density");
+        assert!(e.path.ends_with("text.png"), "{e}");
+        let settings = MapSettings {
+            colour: Some(PathBuf::from("absent.png")),
+            ..MapSettings::default()
+        };
+        let e = SurfaceMaps::load(&settings, &dir).expect_err("missing");
+        assert!(e.to_string().starts_with("maps.colour = "), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
