@@ -882,6 +882,33 @@ impl PreparedScene {
 }
 
 impl PreparedScene {
+    /// The scene's surface maps (length, density, direction, colour).
+    pub fn maps(&self) -> &SurfaceMaps {
+        &self.maps
+    }
+
+    /// The density bands of shell layer `i` (with a density map).
+    pub fn shell_density(&self, i: usize) -> Option<&Texture> {
+        self.shells.get(i).and_then(|t| t.density.as_ref())
+    }
+
+    /// The lean every vertex shares at `time` (gravity + spring lag × response, world space;
+    /// combing adds to it per vertex); `None` when the scene has neither gravity, motion nor a
+    /// direction map.
+    pub fn shared_lean_at(&self, time: f32) -> Option<Vec3> {
+        Bending::at(&self.scene, time).lean
+    }
+
+    /// The object's offset on its path at `time` (`None` without `[motion]`).
+    pub fn object_offset_at(&self, time: f32) -> Option<Vec3> {
+        self.scene
+            .motion
+            .as_ref()
+            .map(|m| crate::shading::path_position(&m.path, time))
+    }
+}
+
+impl PreparedScene {
     /// `settings` with this bake's seed, mesh, fur and base folder: the scene that
     /// [`Self::render_with`] draws, which [`PreparedScene::new`] would bake to the same textures.
     pub fn with_draw_settings(&self, settings: &Scene) -> Scene {
