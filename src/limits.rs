@@ -202,7 +202,32 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
         ),
         (
             "shell textures (fur.number_of_shells × fur.texture_resolution²)",
-            product(&[shells + 1, res, res, SHELL_PER_TEXEL]),
+            product(&[shells + 1, res, res, SHELL_PER_TEXEL]).saturating_add(
+                // A density map adds a band texture per layer (4 bytes per texel, its mips and
+                // the 8-bit image it is built from).
+                if scene.maps.density.is_some() {
+                    product(&[shells + 1, res, res, 4 * 2 + 4])
+                } else {
+                    0
+                },
+            ),
+        ),
+        (
+            "surface maps (at most 4 of 4096² texels, with mips)",
+            product(&[
+                [
+                    &scene.maps.length,
+                    &scene.maps.density,
+                    &scene.maps.direction,
+                    &scene.maps.colour,
+                ]
+                .iter()
+                .filter(|m| m.is_some())
+                .count() as u64,
+                crate::render::maps::MAX_MAP_SIDE as u64,
+                crate::render::maps::MAX_MAP_SIDE as u64,
+                6,
+            ]),
         ),
         (
             "the mesh",

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 /// Largest map side accepted, texels (a map is sampled per vertex and per fragment; finer
 /// than the screen buys nothing).
-pub const MAX_MAP_SIDE: u32 = 8192;
+pub const MAX_MAP_SIDE: u32 = 4096;
 
 /// A map that could not be loaded.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -57,8 +57,10 @@ pub const THESIS_NAMES: &[(&str, &str)] = &[
 /// - `camera_distance`: the eye moved along its line of sight to this distance from the target
 ///   (thesis table 4.5; [`crate::scene::CameraSettings::at_distance`]);
 /// - `number_of_spots`: the first N `[[spots]]` of the scene are kept (table 4.4; asking for
-///   more than the scene has is an error).
-pub const SPECIAL_NAMES: &[&str] = &["camera_distance", "number_of_spots"];
+///   more than the scene has is an error);
+/// - `lod`: `on` gives the scene a `[lod]` table (its own, or the defaults), `off` removes it
+///   (level of detail against every shell, at each distance).
+pub const SPECIAL_NAMES: &[&str] = &["camera_distance", "number_of_spots", "lod"];
 
 impl SweepParameter {
     /// Parses `NAME=V1,V2,...`. Commas inside brackets belong to array values.
@@ -237,6 +239,17 @@ pub fn scene_at(
                     spots.truncate(n);
                 }
             }
+            "lod" => match value.as_str() {
+                "on" | "true" => {
+                    table
+                        .entry("lod")
+                        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                }
+                "off" | "false" => {
+                    table.remove("lod");
+                }
+                _ => return Err(context(format!("lod {value:?} must be on or off"))),
+            },
             _ => set_key(&mut table, scene_key(name), parse_value(value)).map_err(&context)?,
         }
     }
@@ -345,6 +358,15 @@ mod tests {
         let d = (scene.camera.eye - scene.camera.target).length();
         assert!((d - 10.0).abs() < 1e-4, "{d}");
         assert_eq!(scene.light.colour, glam::Vec3::new(0.5, 0.25, 1.0));
+        assert_eq!(scene.lod, None);
+        let points = sweep_points(&[param("lod=on,off")]).expect("points");
+        let on = scene_at(text, "torus.toml", dir, &points[0]).expect("on");
+        assert_eq!(on.lod, Some(crate::scene::LodSettings::default()));
+        let with_lod = format!("{text}\n[lod]\nmin_shells = 6\n");
+        let off = scene_at(&with_lod, "torus.toml", dir, &points[1]).expect("off");
+        assert_eq!(off.lod, None);
+        let kept = scene_at(&with_lod, "torus.toml", dir, &points[0]).expect("kept");
+        assert_eq!(kept.lod.map(|l| l.min_shells), Some(6));
     }
 
     #[test]
@@ -356,6 +378,7 @@ mod tests {
             ("fur.no_such_key=1", "no_such_key"),
             ("number_of_spots=3", "number_of_spots"),
             ("camera_distance=-1", "camera_distance"),
+            ("lod=maybe", "lod"),
             ("texture_resolution=abc", "texture_resolution"),
         ] {
             let points = sweep_points(&[param(arg)]).expect("points");
