@@ -141,8 +141,12 @@ fn a_zero_length_map_leaves_only_the_root_layer() {
 fn level_of_detail_changes_smoothly_with_distance() {
     let mut base = scene("torus", 200, 150);
     base.fur.number_of_shells = 30;
+    // Finer than the default (3 pixels per shell), so the sweep crosses more shell counts.
     let with_lod = |mut s: Scene| {
-        s.lod = Some(LodSettings::default());
+        s.lod = Some(LodSettings {
+            pixels_per_shell: 1.5,
+            ..LodSettings::default()
+        });
         s
     };
     let distances: Vec<f32> = (0..=24).map(|k| 10.0 + k as f32 * 0.75).collect();

@@ -627,7 +627,7 @@ pub struct LodSettings {
 impl Default for LodSettings {
     fn default() -> Self {
         LodSettings {
-            pixels_per_shell: 1.5,
+            pixels_per_shell: 3.0,
             min_shells: 4,
             fin_fade_pixels: [1.0, 3.0],
         }
