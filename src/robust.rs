@@ -108,6 +108,27 @@ pub fn shells_and_fins(mesh: &Mesh) {
 /// Side of the framebuffer [`triangle`] rasterizes into.
 const RASTER_SIZE: (u32, u32) = (40, 24);
 
+/// [`triangle`] from raw bytes, as the `triangle` fuzz target feeds it: 12 little-endian `f32`
+/// (three clip-space vertices), a `u16` width and height, and a byte choosing the cull mode.
+/// Shorter inputs do nothing.
+pub fn triangle_bytes(data: &[u8]) {
+    if data.len() < 53 {
+        return;
+    }
+    let f = |i: usize| {
+        f32::from_le_bytes([
+            data[4 * i],
+            data[4 * i + 1],
+            data[4 * i + 2],
+            data[4 * i + 3],
+        ])
+    };
+    let v = |k: usize| Vec4::new(f(4 * k), f(4 * k + 1), f(4 * k + 2), f(4 * k + 3));
+    let size = |i: usize| u32::from(u16::from_le_bytes([data[i], data[i + 1]]));
+    let cull = [CullMode::None, CullMode::Back, CullMode::Front][usize::from(data[52] % 3)];
+    triangle([v(0), v(1), v(2)], size(48), size(50), cull);
+}
+
 /// Clips and sets up the triangle `clip` (clip-space positions) for a `width`×`height`
 /// viewport and checks its bounds; then draws it, blended and depth-tested, into a small
 /// framebuffer with its clip coordinates as varyings and checks that no pixel became NaN.

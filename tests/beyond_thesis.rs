@@ -2,20 +2,13 @@
 //! they change nothing, density only adds strands, level of detail changes the image smoothly
 //! with distance, gravity pulls the fur down, and motion is time-addressable.
 
+mod common;
+use common::scene;
+
 use pelage::render::PreparedScene;
 use pelage::scene::{DebugView, GravitySettings, LodSettings, Scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn scene(name: &str, width: u32, height: u32) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(format!("{name}.toml"));
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    scene.image.width = width;
-    scene.image.height = height;
-    scene
-}
 
 fn render(scene: &Scene) -> Vec<u8> {
     PreparedScene::new(scene)

@@ -1,19 +1,11 @@
 //! The effects over time: burning only ever removes fur, animations are time-addressable.
 
+mod common;
+use common::scene;
+
 use pelage::render::PreparedScene;
-use pelage::scene::Scene;
 use std::path::PathBuf;
 use std::process::Command;
-
-fn scene(name: &str, width: u32, height: u32) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(format!("{name}.toml"));
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    scene.image.width = width;
-    scene.image.height = height;
-    scene
-}
 
 #[test]
 fn a_burn_only_ever_removes_fur() {

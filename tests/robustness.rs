@@ -344,29 +344,10 @@ fn fuzz_regressions_stay_fixed() {
             match target {
                 "scene" => pelage::robust::scene_text(&String::from_utf8_lossy(&data)),
                 "obj" => pelage::robust::obj_bytes(&data),
-                _ => triangle_bytes(&data),
+                _ => pelage::robust::triangle_bytes(&data),
             }
             replayed += 1;
         }
     }
     assert!(replayed >= 2, "{replayed} regression inputs");
-}
-
-/// The triangle fuzz target's decoding of its input (see `fuzz/fuzz_targets/triangle.rs`).
-fn triangle_bytes(data: &[u8]) {
-    if data.len() < 53 {
-        return;
-    }
-    let f = |i: usize| {
-        f32::from_le_bytes([
-            data[4 * i],
-            data[4 * i + 1],
-            data[4 * i + 2],
-            data[4 * i + 3],
-        ])
-    };
-    let v = |k: usize| Vec4::new(f(4 * k), f(4 * k + 1), f(4 * k + 2), f(4 * k + 3));
-    let size = |i: usize| u32::from(u16::from_le_bytes([data[i], data[i + 1]]));
-    let cull = [CullMode::None, CullMode::Back, CullMode::Front][usize::from(data[52] % 3)];
-    pelage::robust::triangle([v(0), v(1), v(2)], size(48), size(50), cull);
 }
