@@ -272,11 +272,15 @@ fn shadow_change(light_dir_world: vec3<f32>, normal: vec3<f32>, height_above: f3
     return l * (h / cos);
 }
 
-// Sampler::sample_nearest_level: the alpha of texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋.
+// Sampler::sample_nearest_level: the alpha of texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋. The
+// level's size is level 0's halved `level` times (at least 1, as the oracle's chain is built),
+// not textureDimensions(colour_map, level): lavapipe answers that query for a level that
+// differs between the lanes of one SIMD group with one lane's level, and the other lanes then
+// read outside their level (robust access returns 0: shadow-free specks where λ crosses k + ½).
 fn sample_nearest_level_alpha(uv: vec2<f32>, lod: f32) -> f32 {
     let max_level = f32(textureNumLevels(colour_map) - 1u);
     let level = u32(clamp(lod, 0.0, max_level) + 0.5);
-    let size = vec2<i32>(textureDimensions(colour_map, level));
+    let size = max(vec2<i32>(textureDimensions(colour_map, 0u)) >> vec2<u32>(level), vec2<i32>(1));
     var x = i32(floor(uv.x * f32(size.x)));
     var y = i32(floor(uv.y * f32(size.y)));
     x = ((x % size.x) + size.x) % size.x;
