@@ -182,3 +182,92 @@ fn export_replaces_a_previous_export_and_refuses_foreign_folders() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
+
+fn export_scene(name: &str, extra: &[&str]) -> (PathBuf, Value) {
+    let dir = scratch(name);
+    let scene_path = format!("{}/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let o = Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .arg("export")
+        .arg(&scene_path)
+        .args(["--width", "96", "--height", "72"])
+        .args(extra)
+        .arg("-o")
+        .arg(&dir)
+        .output()
+        .expect("pelage runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json = read_json(&dir.join("scene.json"));
+    (dir, json)
+}
+
+/// Level of detail and motion: the spans of the exported instant (summing to the number of
+/// shells, as many layers drawn as the level says), the level, the fin fade, the object's
+/// offset and the shared lean.
+#[test]
+fn export_gives_the_level_of_detail_lean_and_offset_of_the_instant() {
+    let (_, json) = export_scene("lod-flyaway", &["--time", "2"]);
+    let scene = Scene::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/lod-flyaway.toml"
+    )))
+    .expect("scene");
+    let n = scene.fur.number_of_shells as usize;
+    let spans: Vec<f64> = json["layers"]
+        .as_array()
+        .expect("layers")
+        .iter()
+        .map(|l| l["lod_span"].as_f64().expect("lod_span"))
+        .collect();
+    assert_eq!(spans.len(), n);
+    let total: f64 = spans.iter().sum();
+    assert!((total - n as f64).abs() < 1e-3, "spans sum to {total}");
+    let lod = &json["frame"]["level_of_detail"];
+    let level = lod["level"].as_f64().expect("level");
+    assert!((4.0..n as f64).contains(&level), "far away: {level}");
+    let drawn = spans.iter().filter(|&&s| s > 0.0).count();
+    assert_eq!(drawn, level.ceil() as usize);
+    assert!(lod["fur_pixels"].as_f64().expect("fur_pixels") > 0.0);
+    let fin_fade = lod["fin_fade"].as_f64().expect("fin_fade");
+    assert!((0.0..=1.0).contains(&fin_fade));
+    let motion = scene.motion.as_ref().expect("motion");
+    assert_eq!(
+        f32s(&json["frame"]["object_offset"]),
+        pelage::shading::path_position(&motion.path, 2.0).to_array()
+    );
+    assert_eq!(f32s(&json["frame"]["lean"]).len(), 3);
+    assert_eq!(json["scene"]["lod"]["min_shells"], 4);
+}
+
+/// Maps: the surface maps as pelage reads them, and each shell's density bands with mips.
+#[test]
+fn export_holds_the_surface_maps_and_density_bands() {
+    let (dir, json) = export_scene("density", &[]);
+    let map = image::open(dir.join(json["maps"]["files"]["density"].as_str().expect("map")))
+        .expect("map PNG")
+        .to_rgba8();
+    let source = image::open(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/maps/density-falloff.png"
+    ))
+    .expect("source map")
+    .to_rgba8();
+    assert_eq!(map.as_raw(), source.as_raw());
+    assert!(json["maps"]["files"]["length"].is_null());
+    for layer in json["layers"].as_array().expect("layers") {
+        let bands = image::open(dir.join(layer["density_texture"].as_str().expect("bands")))
+            .expect("bands PNG")
+            .to_rgba8();
+        let colour = image::open(dir.join(layer["colour_texture"].as_str().expect("colour")))
+            .expect("colour PNG")
+            .to_rgba8();
+        assert_eq!(bands.dimensions(), colour.dimensions());
+        // A: the strands of every band, the colour map's alpha.
+        assert!(
+            bands
+                .pixels()
+                .zip(colour.pixels())
+                .all(|(b, c)| b[3] == c[3])
+        );
+    }
+    assert!(dir.join("textures/mips/shell_00_density_1.png").exists());
+}

@@ -7,8 +7,10 @@
 //! DIR/meshes/fur.gltf, fur.bin         skin, every shell layer, this frame's fins (glTF 2.0)
 //! DIR/textures/shell_NN_colour.png     shell layer NN (root = 00), mip level 0
 //! DIR/textures/shell_NN_tangent.png
+//! DIR/textures/shell_NN_density.png    shell NN's density bands (scenes with a density map)
 //! DIR/textures/fin_colour.png, fin_tangent.png
 //! DIR/textures/mips/<name>_L.png       mip level L ≥ 1 of each texture above
+//! DIR/textures/maps/<map>.png          the surface maps (length, density, direction, colour)
 //! ```
 //!
 //! **Textures.** RGBA8 PNG, no colour space (linear values), row 0 at `v = 0`: upload as is.
@@ -19,27 +21,41 @@
 //! `(a + b + c + d + 2) >> 2` of the 2×2 block below it); use the exported levels rather
 //! than the GPU's mip generation to sample the same values.
 //!
+//! **Beyond the thesis.** Density band textures (`shell_NN_density.png`, with mips, sampled
+//! like the colour map): R, G, B, A = the alpha of the strands in density bands ≤ 0, ≤ 1, ≤ 2,
+//! ≤ 3 (A equals the colour map's alpha); the fragment's alpha is `density_alpha(bands,
+//! density)` ([`crate::shading::density_alpha`]). Surface maps (`textures/maps/`): the maps as
+//! pelage reads them (RGBA8, level 0 only), sampled in mesh uv (`TEXCOORD_0`) bilinearly at
+//! level 0 with texel centres at `(i + ½)/size` and the `[maps] address` per axis
+//! ([`crate::render::maps`]). `scene.json` gives each layer's `lod_span` at the instant (0: the
+//! layer is not drawn), the level of detail (`frame.level_of_detail`), the shared lean
+//! (`frame.lean`) and the object's path offset (`frame.object_offset`).
+//!
 //! **Meshes.** `fur.gltf` holds one mesh per pass, drawn in this order:
 //! - `skin`: `POSITION`, `NORMAL`, `TANGENT` (xyz = frame T along +u, w = ±1 with
 //!   `B = w·(N × T)`), `TEXCOORD_0` (mesh uv; the fur uv is `uv × texture_repeat`), and the
 //!   application-specific `_BINORMAL` (frame B), `_DPDU`, `_DPDV` (∂p/∂u, ∂p/∂v, unnormalised:
 //!   the shadow and wind projections need them);
 //! - `shell_NN`: the skin pushed out along `NORMAL` by `layers[NN].offset` (its own
-//!   `POSITION`; every other attribute and the indices shared with `skin`); the wind's vertex
-//!   displacement (thesis 3.3) is applied on top per frame, see `scene.json`'s `frame.wind`;
+//!   `POSITION`; every other attribute and the indices shared with `skin`); per frame, the
+//!   vertex stage scales the offset by the length map, adds the wind's (thesis 3.3) or the
+//!   lean's displacement and the object's path offset, see `scene.json`'s `frame`;
 //! - `fins`: this frame's silhouette fins (view dependent, chosen on the CPU), with `POSITION`,
 //!   `NORMAL` (the root's vertex normal), `TEXCOORD_0` (fin uv, v = 0 at the root) and the fur
 //!   varyings of the oracle's fragment stage at each corner: `_LIGHT`, `_EYE` (tangent space of
-//!   the fin), `_FADE`, `_OBJECT` (the root point, object space).
+//!   the fin), `_FADE` (level of detail's fin fade included), `_OBJECT` (the root point, object
+//!   space), `_MESH_UV` (the root's mesh uv, where the maps are read), `_LENGTH` (the length
+//!   map at the root; 1 at the bottom corners). Fin positions include the object's offset.
 //!
 //! Triangles are counter-clockwise seen from outside; indices are u32.
 //!
 //! **scene.json.** `scene` repeats the scene file with every default filled in (the names of
 //! the TOML keys); `camera` has the column-major `view`, `projection` and `view_projection`
 //! matrices; `frame` the values resolved at the exported instant (unit light direction, wind
-//! force, burn exponent, spots in application order); `layers` the per-shell uniforms
-//! (offset, shadow lookups, height fraction, texture files); `fin`, `pipeline` (depth, blend,
-//! cull, samplers) and `conventions` say the rest.
+//! force, burn exponent, spots in application order, lean, object offset, level of detail);
+//! `layers` the per-shell uniforms (offset, shadow lookups, height fraction, LOD span, texture
+//! files); `maps` the surface map files; `fin`, `pipeline` (depth, blend, cull, samplers) and
+//! `conventions` say the rest.
 
 use crate::camera::Camera;
 use crate::raster::Texture;
@@ -138,11 +154,16 @@ pub fn export(
     let image = prepared.render_at(time, crate::raster::DEFAULT_TILE_SIZE)?;
     w.png("oracle.png", image.width, image.height, &image.rgba8)?;
 
+    let lod = prepared.level_of_detail_at(time);
     let mut layers = Vec::new();
     for i in 0..prepared.shell_count() {
         let (colour, tangent) = prepared.shell_textures(i).expect("layer in range");
         let colour_file = w.texture(&format!("shell_{i:02}_colour"), colour)?;
         let tangent_file = w.texture(&format!("shell_{i:02}_tangent"), tangent)?;
+        let density_file = prepared
+            .shell_density(i)
+            .map(|bands| w.texture(&format!("shell_{i:02}_density"), bands))
+            .transpose()?;
         let p = prepared.shell_layer_params(i as u32);
         layers.push(json!({
             "index": p.index,
@@ -150,10 +171,28 @@ pub fn export(
             "shadow_lookups": p.lookups,
             "height_fraction": p.height_fraction,
             "max_shell": p.max_shell,
+            "lod_span": lod.as_ref().map_or(1.0, |l| l.spans[i]),
             "colour_texture": colour_file,
             "tangent_texture": tangent_file,
+            "density_texture": density_file,
             "mip_levels": colour.level_count(),
         }));
+    }
+    let surface = prepared.maps();
+    let mut maps = serde_json::Map::new();
+    for (name, map) in [
+        ("length", &surface.length),
+        ("density", &surface.density),
+        ("direction", &surface.direction),
+        ("colour", &surface.colour),
+    ] {
+        if let Some(map) = map {
+            let level = map.level(0).expect("level 0");
+            let rgba: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            let relative = format!("textures/maps/{name}.png");
+            w.png(&relative, level.width, level.height, &rgba)?;
+            maps.insert(name.to_string(), json!(relative));
+        }
     }
     let fin = match prepared.fin_textures() {
         Some((colour, tangent)) => {
@@ -176,7 +215,7 @@ pub fn export(
     let text = serde_json::to_string_pretty(&gltf).expect("JSON of plain values");
     w.write("meshes/fur.gltf", text.as_bytes())?;
 
-    let json = scene_json(prepared, time, layers, fin);
+    let json = scene_json(prepared, time, layers, fin, Value::Object(maps));
     let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
     w.write("scene.json", text.as_bytes())?;
     Ok(ExportSummary { files: w.files })
@@ -213,6 +252,8 @@ fn debug_name<T: std::fmt::Debug>(v: T) -> String {
 
 /// The scene with every default filled in, under the TOML's key names.
 pub fn scene_values(s: &Scene) -> Value {
+    let map_path =
+        |p: &Option<PathBuf>| p.as_ref().map(|p| s.base_dir.join(p).display().to_string());
     json!({
         "seed": s.seed,
         "time": s.time,
@@ -285,6 +326,22 @@ pub fn scene_values(s: &Scene) -> Value {
             "matches": b.matches, "start": b.start, "high_exponent": b.high_exponent,
             "low_exponent": b.low_exponent, "spread_duration": b.spread_duration,
         })),
+        "maps": {
+            "length": map_path(&s.maps.length), "density": map_path(&s.maps.density),
+            "direction": map_path(&s.maps.direction), "colour": map_path(&s.maps.colour),
+            "address": [debug_name(s.maps.address[0]), debug_name(s.maps.address[1])],
+        },
+        "lod": s.lod.as_ref().map(|l| json!({
+            "pixels_per_shell": l.pixels_per_shell, "min_shells": l.min_shells,
+            "fin_fade_pixels": l.fin_fade_pixels,
+        })),
+        "gravity": s.gravity.as_ref().map(|g| json!({
+            "direction": g.direction, "strength": g.strength,
+        })),
+        "motion": s.motion.as_ref().map(|m| json!({
+            "path": m.path, "frequency": m.frequency, "damping": m.damping,
+            "response": m.response,
+        })),
     })
 }
 
@@ -322,7 +379,13 @@ fn spot_json(spot: &Spot) -> Value {
     }
 }
 
-fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Value) -> Value {
+fn scene_json(
+    prepared: &PreparedScene,
+    time: f32,
+    layers: Vec<Value>,
+    fin: Value,
+    maps: Value,
+) -> Value {
     let s = prepared.scene();
     let cam = camera(s);
     let aspect = s.image.width as f32 / s.image.height as f32;
@@ -335,6 +398,14 @@ fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Valu
             "tangent_fraction": w.tangent_fraction,
         })
     });
+    let lod = prepared.level_of_detail_at(time).map(|l| {
+        json!({
+            "fur_pixels": l.fur_pixels,
+            "level": l.level,
+            "fin_fade": l.fin_fade,
+        })
+    });
+    let map_settings = &s.maps;
     json!({
         "format": "pelage export 1",
         "time": time,
@@ -358,8 +429,16 @@ fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Valu
             "spots": shade.spots.iter().map(spot_json).collect::<Vec<_>>(),
             "alpha_discard": ALPHA_DISCARD,
             "burn_threshold": crate::shading::BURN_THRESHOLD,
+            "lean": prepared.shared_lean_at(time),
+            "object_offset": prepared.object_offset_at(time),
+            "level_of_detail": lod,
         },
         "layers": layers,
+        "maps": {
+            "files": maps,
+            "address": [debug_name(map_settings.address[0]), debug_name(map_settings.address[1])],
+            "sampler": "bilinear at level 0 in mesh uv, texel centres at (i + ½)/size, f32 weights",
+        },
         "fin": fin,
         "pipeline": {
             "clear_colour": s.image.background.extend(1.0),
@@ -378,7 +457,8 @@ fn scene_json(prepared: &PreparedScene, time: f32, layers: Vec<Value>, fin: Valu
             "output": "8-bit channel = ⌊255·clamp(c, 0, 1) + 0.5⌋, no colour-space conversion",
             "texel": "byte / 255, linear",
             "tangent_encoding": "unorm8(t·0.5 + 0.5), tangent space (x = u, y = v, z = away from skin)",
-            "fragment_order": "burn (3.4), wind reverse lookup (3.3), colour and tangent maps, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), shell shadow (3.2.2), Kajiya–Kay (2.5, 2.7), dampened specular, eq. 3.7",
+            "fragment_order": "burn (3.4), length cut (shells), wind and lean reverse lookup (3.3), colour and tangent maps, density (bands on shells, a factor on fins), lod_alpha, colour map tint, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), lean-bent tangent, shell shadow (3.2.2; through the density bands), Kajiya–Kay (2.5, 2.7), dampened specular, eq. 3.7",
+            "vertex_order": "length = length map at the vertex (1 without); offset and strand height × length; displacement = wind_displacement (wind alone) or lean_displacement(wind direction·clamp(force) + lean + comb, …) with a lean; position + normal·offset + displacement + object offset",
         },
     })
 }
@@ -509,11 +589,15 @@ fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
         let fade: Vec<f32> = fin_vertices.iter().map(|(_, f)| f.fade).collect();
         let fade = b.floats(&fade, 1, false);
         let object = b.vec3s(fin_vertices.iter().map(|(_, f)| f.object), false);
+        let mesh_uv = b.vec2s(fin_vertices.iter().map(|(_, f)| f.mesh_uv));
+        let length: Vec<f32> = fin_vertices.iter().map(|(_, f)| f.length).collect();
+        let length = b.floats(&length, 1, false);
         let indices = b.indices(&fin_triangles);
         meshes.push(json!({ "name": "fins", "primitives": [{
             "attributes": {
                 "POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv,
                 "_LIGHT": light, "_EYE": eye, "_FADE": fade, "_OBJECT": object,
+                "_MESH_UV": mesh_uv, "_LENGTH": length,
             },
             "indices": indices, "mode": 4,
         }]}));

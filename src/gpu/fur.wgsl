@@ -3,7 +3,8 @@
 // Rust function it mirrors (src/shading/*.rs) and the thesis equation it implements, so a
 // difference between the backends can be traced to one term. Differences that remain by design:
 // GPU `pow`, `exp`, `log2`, `sin` instead of libm; the sampler's trilinear filter instead of the
-// oracle's f32 one; non-finite inputs are not sanitised (valid scenes never produce them).
+// oracle's f32 one for the fur textures (the surface maps are read with the oracle's weights,
+// `sample_map`); non-finite inputs are not sanitised (valid scenes never produce them).
 
 // ---- uniforms ---------------------------------------------------------------------------
 
@@ -20,6 +21,10 @@ struct FrameUniforms {
     weights: vec4<f32>,        // eq. 3.7 weights: ambient, diffuse, specular, dampened
     weights2: vec4<f32>,       // x: shadow weight
     counts: vec4<u32>,         // specular tangents (1 or 3), debug view, spots, matches
+    offset: vec4<f32>,         // xyz: the object's offset on its path at this instant (0 at rest)
+    lean: vec4<f32>,           // xyz: the shared lean (gravity + spring lag, world), w: 1 with a lean
+    maps: vec4<u32>,           // x: maps present (1 length, 2 density, 4 direction, 8 colour);
+                               // y, z: address along u, v (0 clamp, 1 wrap)
 }
 
 struct LayerUniforms {
@@ -29,8 +34,8 @@ struct LayerUniforms {
     height_fraction: f32,      // i / N
     offset: f32,               // distance above the skin
     clamp_v: u32,              // 1: clamp v (fins), 0: wrap
-    _pad0: u32,
-    _pad1: u32,
+    lod_span: f32,             // baked layers this one stands for under level of detail (1 without)
+    shell: u32,                // 1: a shell layer, 0: the fins (or the skin)
 }
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
@@ -42,11 +47,20 @@ struct LayerUniforms {
 @group(0) @binding(1) var<storage, read> spots: array<vec4<f32>>;
 // Unit match directions (3.4), xyz.
 @group(0) @binding(2) var<storage, read> matches: array<vec4<f32>>;
+// The surface maps in mesh uv (render/maps.rs), 1×1 placeholders where the scene has none
+// (frame.maps.x says which are real); read with textureLoad by `sample_map`.
+@group(0) @binding(3) var length_map: texture_2d<f32>;
+@group(0) @binding(4) var density_map: texture_2d<f32>;
+@group(0) @binding(5) var direction_map: texture_2d<f32>;
+@group(0) @binding(6) var tint_map: texture_2d<f32>;
 
 @group(1) @binding(0) var<uniform> layer: LayerUniforms;
 @group(1) @binding(1) var colour_map: texture_2d<f32>;
 @group(1) @binding(2) var tangent_map: texture_2d<f32>;
 @group(1) @binding(3) var fur_sampler: sampler;
+// Density bands of a shell layer (fur/bake.rs: R, G, B, A = alpha of the strands in bands
+// ≤ 0..≤ 3); a placeholder on layers without them.
+@group(1) @binding(4) var density_bands: texture_2d<f32>;
 
 // ---- numeric helpers (src/shading/numeric.rs, glam) ------------------------------------
 
@@ -272,11 +286,15 @@ fn shadow_change(light_dir_world: vec3<f32>, normal: vec3<f32>, height_above: f3
     return l * (h / cos);
 }
 
-// Sampler::sample_nearest_level: the alpha of texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋.
-fn sample_nearest_level_alpha(uv: vec2<f32>, lod: f32) -> f32 {
-    let max_level = f32(textureNumLevels(colour_map) - 1u);
+// Sampler::sample_nearest_level: texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋ of `t`. The level's
+// size is level 0's halved `level` times (at least 1, as the oracle's chain is built), not
+// textureDimensions(t, level): lavapipe answers that query for a level that differs between
+// the lanes of one SIMD group with one lane's level, and the other lanes then read outside
+// their level (robust access returns 0: shadow-free specks where λ crosses k + ½).
+fn sample_nearest_level(t: texture_2d<f32>, uv: vec2<f32>, lod: f32) -> vec4<f32> {
+    let max_level = f32(textureNumLevels(t) - 1u);
     let level = u32(clamp(lod, 0.0, max_level) + 0.5);
-    let size = vec2<i32>(textureDimensions(colour_map, level));
+    let size = max(vec2<i32>(textureDimensions(t, 0u)) >> vec2<u32>(level), vec2<i32>(1));
     var x = i32(floor(uv.x * f32(size.x)));
     var y = i32(floor(uv.y * f32(size.y)));
     x = ((x % size.x) + size.x) % size.x;
@@ -285,15 +303,24 @@ fn sample_nearest_level_alpha(uv: vec2<f32>, lod: f32) -> f32 {
     } else {
         y = ((y % size.y) + size.y) % size.y;
     }
-    return textureLoad(colour_map, vec2<i32>(x, y), i32(level)).a;
+    return textureLoad(t, vec2<i32>(x, y), i32(level));
 }
 
-// shell_shadow: Σ_{k=1..m} saturate(alpha(uv + step·(k/m))).
-fn shell_shadow(uv: vec2<f32>, shadow_lookup: vec2<f32>, lookups: u32, lod: f32) -> f32 {
+// shade_fur's `covered_at`: the alpha of one texel, through the density bands on a shell with
+// a density map, else the colour map's.
+fn covered_at(uv: vec2<f32>, lod: f32, density: f32) -> f32 {
+    if (has_bands()) {
+        return density_alpha(sample_nearest_level(density_bands, uv, lod), density);
+    }
+    return sample_nearest_level(colour_map, uv, lod).a;
+}
+
+// shell_shadow: Σ_{k=1..m} saturate(covered(uv + step·(k/m))).
+fn shell_shadow(uv: vec2<f32>, shadow_lookup: vec2<f32>, lookups: u32, lod: f32, density: f32) -> f32 {
     let m = f32(lookups);
     var shadow = 0.0;
     for (var k = 1u; k <= lookups; k++) {
-        shadow += saturate01(sample_nearest_level_alpha(uv + shadow_lookup * (f32(k) / m), lod));
+        shadow += saturate01(covered_at(uv + shadow_lookup * (f32(k) / m), lod, density));
     }
     return shadow;
 }
@@ -385,6 +412,150 @@ fn bend_tangent(tangent: vec3<f32>, wind_tangent_space: vec3<f32>, fraction: f32
     return normalize_or(tangent + fraction * wind_tangent_space, normalize_or_zero(tangent));
 }
 
+// ---- surface maps (render/maps.rs; shading/maps.rs) -------------------------------------
+
+const MAP_LENGTH: u32 = 1u;
+const MAP_DENSITY: u32 = 2u;
+const MAP_DIRECTION: u32 = 4u;
+const MAP_COLOUR: u32 = 8u;
+
+fn has_map(which: u32) -> bool {
+    return (frame.maps.x & which) != 0u;
+}
+
+// A shell layer with density bands (LayerMaps::density is Some).
+fn has_bands() -> bool {
+    return has_map(MAP_DENSITY) && layer.shell != 0u;
+}
+
+// render/texture.rs `address` under `[maps] address`: wrap (Euclidean remainder) or clamp.
+fn map_address(i: i32, size: i32, wrap: u32) -> i32 {
+    if (wrap != 0u) {
+        return ((i % size) + size) % size;
+    }
+    return clamp(i, 0, size - 1);
+}
+
+// SurfaceMaps::sample: bilinear at level 0 between the texel centres (i + ½)/size, with the
+// oracle's f32 weights (Sampler::bilinear_footprint and BilinearFootprint::filter), not the
+// GPU sampler's fixed-point ones: a map decides cuts (length) and which strands show
+// (density), so it is read as the oracle reads it.
+fn sample_map(map: texture_2d<f32>, uv: vec2<f32>) -> vec4<f32> {
+    let size = vec2<i32>(textureDimensions(map, 0u));
+    let x = uv.x * f32(size.x) - 0.5;
+    let y = uv.y * f32(size.y) - 0.5;
+    let xf = floor(x);
+    let yf = floor(y);
+    let fx = x - xf;
+    let fy = y - yf;
+    let xa = map_address(i32(xf), size.x, frame.maps.y);
+    let xb = map_address(i32(xf) + 1, size.x, frame.maps.y);
+    let ya = map_address(i32(yf), size.y, frame.maps.z);
+    let yb = map_address(i32(yf) + 1, size.y, frame.maps.z);
+    let t00 = textureLoad(map, vec2<i32>(xa, ya), 0);
+    let t10 = textureLoad(map, vec2<i32>(xb, ya), 0);
+    let t01 = textureLoad(map, vec2<i32>(xa, yb), 0);
+    let t11 = textureLoad(map, vec2<i32>(xb, yb), 0);
+    let top = t00 + (t10 - t00) * fx;
+    let bottom = t01 + (t11 - t01) * fx;
+    return top + (bottom - top) * fy;
+}
+
+// SurfaceMaps::length_at: the length map's red channel, 1 without one.
+fn length_at(uv: vec2<f32>) -> f32 {
+    if (has_map(MAP_LENGTH)) {
+        return sample_map(length_map, uv).x;
+    }
+    return 1.0;
+}
+
+// layer_within_length: the root layer always shows; layer i/N while i/N · vertex length is
+// below the length sampled here.
+fn layer_within_length(height_fraction: f32, vertex_length: f32, local_length: f32) -> bool {
+    return height_fraction <= 0.0 || height_fraction * vertex_length < local_length;
+}
+
+// density_alpha: x = 4·saturate(density); linear between band ⌊x⌋ − 1 (0 below the first) and
+// band ⌊x⌋; band 3 from x = 4 on.
+fn density_band_alpha(bands: vec4<f32>, i: i32) -> f32 {
+    if (i < 0) {
+        return 0.0;
+    }
+    return bands[min(i, 3)];
+}
+
+fn density_alpha(bands: vec4<f32>, density: f32) -> f32 {
+    let x = saturate01(density) * 4.0;
+    let kf = floor(x);
+    let f = x - kf;
+    let k = i32(kf);
+    if (k >= 4) {
+        return bands.w;
+    }
+    let below = density_band_alpha(bands, k - 1);
+    return below + (density_band_alpha(bands, k) - below) * f;
+}
+
+// comb_lean: (r·2 − 1, g·2 − 1, 0), shortened to length 1 when longer.
+fn comb_lean(sample: vec4<f32>) -> vec3<f32> {
+    var v = vec2<f32>(sample.x * 2.0 - 1.0, sample.y * 2.0 - 1.0);
+    let l = length(v);
+    if (l > 1.0) {
+        v = v / l;
+    }
+    return vec3<f32>(v, 0.0);
+}
+
+// tint_strand: strand · saturate(tint), per channel.
+fn tint_strand(strand: vec3<f32>, tint: vec3<f32>) -> vec3<f32> {
+    return strand * vec3<f32>(saturate01(tint.x), saturate01(tint.y), saturate01(tint.z));
+}
+
+// ---- lean and level of detail (shading/motion.rs, shading/lod.rs) ------------------------
+
+// lean_displacement: the lean's part tangent to the surface (at most 1 long) times
+// h = fraction·height, pulled back along −n̂ by h − sqrt(h² − |o|²).
+fn lean_displacement(lean: vec3<f32>, normal: vec3<f32>, shell_fraction: f32,
+                     strand_height: f32) -> vec3<f32> {
+    let n = normalize_or_zero(normal);
+    var across = lean - n * dot(lean, n);
+    let l = length(across);
+    if (l > 1.0) {
+        across = across / l;
+    }
+    let h = saturate01(shell_fraction) * max(strand_height, 0.0);
+    let offset = across * h;
+    let pull = h - sqrt(max(h * h - dot(offset, offset), 0.0));
+    return offset - n * pull;
+}
+
+// Bending::lean_at: the shared lean plus the combing of the direction map at this vertex,
+// world space (the frame's tangent and binormal carry its u and v).
+fn lean_at(uv: vec2<f32>, tf: TangentFrame) -> vec3<f32> {
+    var comb = vec3<f32>(0.0);
+    if (has_map(MAP_DIRECTION)) {
+        let c = comb_lean(sample_map(direction_map, uv));
+        comb = tf.tangent * c.x + tf.binormal * c.y;
+    }
+    return frame.lean.xyz + comb;
+}
+
+// lod_alpha: a layer standing for `span` layers, 1 − (1 − α)^span; span 1 keeps α as it is.
+fn lod_alpha(alpha: f32, span: f32) -> f32 {
+    if (span == 1.0) {
+        return alpha;
+    }
+    let a = saturate01(alpha);
+    if (span <= 0.0) {
+        return 0.0;
+    }
+    // pow(0, s) is outside WGSL's domain of pow (log2 of 0): an opaque texel stays opaque.
+    if (a >= 1.0) {
+        return 1.0;
+    }
+    return 1.0 - pow(1.0 - a, span);
+}
+
 // ---- burning (3.4; burn.rs, fragment.rs BurnState) ---------------------------------------
 
 const BURN_THRESHOLD: f32 = 0.1;
@@ -463,7 +634,7 @@ struct SkinVaryings {
 @vertex
 fn vs_skin(v: MeshVertex) -> SkinVaryings {
     var out: SkinVaryings;
-    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.clip = frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0);
     out.normal = v.normal;
     return out;
 }
@@ -493,29 +664,55 @@ struct FurVaryings {
     @location(6) normal: vec3<f32>,
     @location(7) wind_uv: vec2<f32>,
     @location(8) wind: vec3<f32>,
+    @location(9) mesh_uv: vec2<f32>,
+    @location(10) length: f32,
+    @location(11) lean: vec3<f32>,
 }
 
-// The shell vertex closure: the layer pushed out along the normal, moved by the wind (3.3),
-// eye and light into tangent space (3.2.1), the shadow step projected to uv (3.2.2).
+// The shell vertex closure: the layer pushed out along the normal (its height scaled by the
+// length map), moved by the wind (3.3) or, with a lean, by the wind's bend plus the lean, and by
+// the object's path offset; eye and light into tangent space (3.2.1), the shadow step projected
+// to uv (3.2.2).
 @vertex
 fn vs_shell(v: MeshVertex) -> FurVaryings {
     let tf = TangentFrame(v.frame_tangent, v.frame_binormal, v.frame_normal);
     let repeat = frame.fur.xy;
-    let difference = frame.fur.z;
     let light = frame.light.xyz;
     let eye = frame.eye.xyz;
+    // A length map scales the layer's height above the skin (1 without one).
+    let fur_length = length_at(v.uv);
+    let strand_height = frame.fur.z * fur_length;
+    let offset = layer.offset * fur_length;
+    let has_wind = frame.fur.w != 0.0;
+    let has_lean = frame.lean.w != 0.0;
+    let direction = frame.wind.xyz;
+    let force = frame.wind.w;
+    // Bending::displacement.
     var displacement = vec3<f32>(0.0);
+    var lean_ts = vec3<f32>(0.0);
+    if (has_lean) {
+        var wind_bend = vec3<f32>(0.0);
+        if (has_wind) {
+            wind_bend = direction * clamp(force, -1.0, 1.0);
+        }
+        let lean = lean_at(v.uv, tf);
+        displacement = lean_displacement(wind_bend + lean, v.normal, layer.height_fraction,
+                                         strand_height);
+        lean_ts = to_tangent_space(lean, tf);
+    } else if (has_wind) {
+        displacement = wind_displacement(direction, v.normal, force, layer.height_fraction,
+                                         strand_height);
+    }
     var wind_uv = vec2<f32>(0.0);
-    var wind_ts = vec3<f32>(0.0);
-    if (frame.fur.w != 0.0) {
-        let direction = frame.wind.xyz;
-        let force = frame.wind.w;
-        displacement = wind_displacement(direction, v.normal, force, layer.height_fraction, difference);
+    if (has_wind || has_lean) {
         wind_uv = wind_uv_offset(displacement, v.normal, v.dpdu / repeat.x, v.dpdv / repeat.y);
+    }
+    var wind_ts = vec3<f32>(0.0);
+    if (has_wind) {
         wind_ts = to_tangent_space(direction * force, tf);
     }
-    let p = v.position + v.normal * layer.offset + displacement;
-    let change = shadow_change(light, v.frame_normal, difference - layer.offset);
+    let p = v.position + v.normal * offset + displacement + frame.offset.xyz;
+    let change = shadow_change(light, v.frame_normal, strand_height - offset);
     var out: FurVaryings;
     out.clip = frame.view_proj * vec4<f32>(p, 1.0);
     out.uv = v.uv * repeat;
@@ -527,6 +724,9 @@ fn vs_shell(v: MeshVertex) -> FurVaryings {
     out.normal = v.normal;
     out.wind_uv = wind_uv;
     out.wind = wind_ts;
+    out.mesh_uv = v.uv;
+    out.length = fur_length;
+    out.lean = lean_ts;
     return out;
 }
 
@@ -541,6 +741,9 @@ struct FinVertex {
     @location(7) normal: vec3<f32>,
     @location(8) wind_uv: vec2<f32>,
     @location(9) wind: vec3<f32>,
+    @location(10) mesh_uv: vec2<f32>,
+    @location(11) length: f32,
+    @location(12) lean: vec3<f32>,
 }
 
 // The fin vertex closure: the quads and their varyings come from the CPU (silhouette edges).
@@ -557,12 +760,17 @@ fn vs_fin(v: FinVertex) -> FurVaryings {
     out.normal = v.normal;
     out.wind_uv = v.wind_uv;
     out.wind = v.wind;
+    out.mesh_uv = v.mesh_uv;
+    out.length = v.length;
+    out.lean = v.lean;
     return out;
 }
 
 const ALPHA_DISCARD: f32 = 0.5 / 255.0;
 
-// shade_fur (render/fragment.rs): steps 1–7 of its module docs, in order.
+// shade_fur (render/fragment.rs): steps 1–7 of its module docs, in order, with the terms
+// beyond the thesis where shade_fur takes them (length cut, density, level of detail, tint,
+// lean).
 @fragment
 fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     // Coarse derivatives of the fur uv, taken first (uniform control flow).
@@ -573,14 +781,34 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     if (burn.kind == BURNT) {
         discard;
     }
-    // 2. The reverse wind lookup (3.3).
+    // A shell layer above the painted length is dropped (fins are not cut).
+    if (layer.shell != 0u && has_map(MAP_LENGTH)
+        && !layer_within_length(layer.height_fraction, v.length,
+                                sample_map(length_map, v.mesh_uv).x)) {
+        discard;
+    }
+    // 2. The reverse wind lookup (3.3), the lean's too.
     let uv = v.uv - v.wind_uv;
     // 3. Colour and tangent maps, trilinear at the level of detail of the fur uv.
     let lod = level_of_detail(ddx, ddy, vec2<f32>(textureDimensions(colour_map, 0u)));
     let max_level = f32(textureNumLevels(colour_map) - 1u);
     let level = clamp(lod, 0.0, max_level);
     let texel = textureSampleLevel(colour_map, fur_sampler, uv, level);
-    let alpha = texel.a * v.fade;
+    // The density map selects strands through the bands (shells) or scales the alpha (fins).
+    var density = 0.0;
+    var coverage = texel.a;
+    if (has_map(MAP_DENSITY)) {
+        density = sample_map(density_map, v.mesh_uv).x;
+        if (has_bands()) {
+            let bands_level = clamp(lod, 0.0, f32(textureNumLevels(density_bands) - 1u));
+            let bands = textureSampleLevel(density_bands, fur_sampler, uv, bands_level);
+            coverage = density_alpha(bands, density);
+        } else {
+            coverage = texel.a * saturate01(density);
+        }
+    }
+    // Level of detail: a layer standing for several gets their alpha together.
+    let alpha = lod_alpha(coverage * v.fade, layer.lod_span);
     if (!(alpha >= ALPHA_DISCARD)) {
         discard;
     }
@@ -592,19 +820,26 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     if (debug == 2u) {
         return vec4<f32>(1.0, 1.0, 1.0, alpha);
     }
-    // 4. Spots and stripes (3.2.4), then charring.
-    let spotted = apply_spots(texel.rgb, v.object, v.normal);
+    // 4. The colour map's tint, spots and stripes (3.2.4), then charring.
+    var tinted = texel.rgb;
+    if (has_map(MAP_COLOUR)) {
+        tinted = tint_strand(tinted, sample_map(tint_map, v.mesh_uv).rgb);
+    }
+    let spotted = apply_spots(tinted, v.object, v.normal);
     let strand = strand_colour_after_burn(burn, spotted);
-    // 5. The tangent, bent by the wind (3.3.1).
+    // 5. The tangent, bent by the wind (3.3.1), then by the lean.
     var tangent = normalize_or(encoded.rgb * 2.0 - vec3<f32>(1.0), vec3<f32>(0.0, 0.0, 1.0));
     let wind_fraction = frame.shading2.y;
     if (wind_fraction > 0.0) {
         tangent = bend_tangent(tangent, v.wind, layer.height_fraction * wind_fraction);
     }
+    if (frame.lean.w != 0.0) {
+        tangent = bend_tangent(tangent, v.lean, layer.height_fraction);
+    }
     let light = normalize_or_zero(v.light);
     let eye = normalize_or_zero(v.eye);
-    // 6. The shell self-shadow (3.2.2), displaced by the wind too.
-    let shadow = shell_shadow(uv, v.shadow + v.wind_uv, layer.lookups, lod);
+    // 6. The shell self-shadow (3.2.2), displaced by the wind too; through the density bands.
+    let shadow = shell_shadow(uv, v.shadow + v.wind_uv, layer.lookups, lod, density);
     if (debug == 3u) {
         let g = clamp(1.0 - frame.weights2.x * shadow, 0.0, 1.0);
         return vec4<f32>(g, g, g, alpha);

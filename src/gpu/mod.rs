@@ -6,13 +6,18 @@
 //!   oracle's mip chains* (uploaded level by level, not regenerated), the shell offsets, the
 //!   shading parameters resolved at the instant ([`PreparedScene::shade_params_at`]), and the
 //!   fin quads of the frame ([`PreparedScene::fin_quads_at`]: silhouette edges are found on the
-//!   CPU, as in the thesis).
+//!   CPU, as in the thesis). Beyond the thesis: the surface maps ([`PreparedScene::maps`]) and
+//!   each shell's density bands ([`PreparedScene::shell_density`]); the level of detail of the
+//!   instant ([`PreparedScene::level_of_detail_at`]: layers of span 0 are not drawn, the others
+//!   get their span as a uniform); the shared lean and the object's path offset
+//!   ([`PreparedScene::shared_lean_at`], [`PreparedScene::object_offset_at`]).
 //! - **Mirrored code**: `fur.wgsl` holds the vertex closures of the shell pass and the fragment
 //!   closure `shade_fur` term by term, each WGSL function named after the Rust function it
 //!   mirrors, with the thesis equation numbers in comments.
 //! - **The GPU's own**: rasterization, clipping and perspective-correct interpolation; the
 //!   sampler's trilinear filter (at the level of detail the shader computes from coarse
-//!   derivatives, as the oracle does); `pow`, `log2`, `sqrt`; blending. The colour target is
+//!   derivatives, as the oracle does; the surface maps are read with the oracle's own f32
+//!   bilinear weights instead, see `sample_map`); `pow`, `log2`, `sqrt`; blending. The colour target is
 //!   `Rgba32Float` when the adapter can blend it (lavapipe can), else `Rgba16Float`; it is read
 //!   back and rounded to 8 bits on the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
 //!
@@ -51,30 +56,6 @@ pub enum GpuError {
     /// The scene has no mesh to draw or a size the GPU cannot take.
     #[error("GPU: {0}")]
     Scene(String),
-    /// The scene uses a feature the WGSL port does not have yet.
-    #[error(
-        "the GPU backend does not implement {0} yet; render this scene with the CPU oracle (--backend cpu)"
-    )]
-    Unsupported(String),
-}
-
-/// The scene features beyond the thesis that the WGSL port does not draw yet (empty when it
-/// draws the scene completely): surface maps, level of detail, gravity, motion.
-pub fn unsupported_features(scene: &crate::scene::Scene) -> Vec<&'static str> {
-    let mut missing = Vec::new();
-    if !scene.maps.is_empty() {
-        missing.push("[maps]");
-    }
-    if scene.lod.is_some() {
-        missing.push("[lod]");
-    }
-    if scene.gravity.is_some() {
-        missing.push("[gravity]");
-    }
-    if scene.motion.is_some() {
-        missing.push("[motion]");
-    }
-    missing
 }
 
 /// Which adapter to use.
@@ -103,6 +84,9 @@ pub struct GpuContext {
 }
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Floats per fin vertex: position and the `FinVertex` varyings of `fur.wgsl`.
+const FIN_FLOATS: usize = 31;
 
 impl GpuContext {
     /// Opens a Vulkan adapter (see [`AdapterChoice`]) and creates a device on it.
@@ -161,10 +145,6 @@ impl GpuContext {
         time: f32,
         options: &GpuOptions,
     ) -> Result<RgbaImage, GpuError> {
-        let missing = unsupported_features(prepared.scene());
-        if !missing.is_empty() {
-            return Err(GpuError::Unsupported(missing.join(", ")));
-        }
         let guard = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = self.render_inner(prepared, time, options);
         let scope = pollster::block_on(guard.pop());
@@ -210,6 +190,19 @@ impl GpuContext {
         );
         let spot_buffer = self.storage(&spots, "spots");
         let match_buffer = self.storage(&matches, "matches");
+        // The surface maps (read at level 0); a 1×1 placeholder for each absent one.
+        let placeholder = self.placeholder();
+        let surface = prepared.maps();
+        let map_view = |map: &Option<crate::raster::Texture>| {
+            map.as_ref()
+                .map_or_else(|| placeholder.clone(), |m| self.upload(m))
+        };
+        let map_views = [
+            map_view(&surface.length),
+            map_view(&surface.density),
+            map_view(&surface.direction),
+            map_view(&surface.colour),
+        ];
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame"),
             entries: &[
@@ -222,6 +215,10 @@ impl GpuContext {
                     2,
                     buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
                 ),
+                layout_entry(3, texture_binding()),
+                layout_entry(4, texture_binding()),
+                layout_entry(5, texture_binding()),
+                layout_entry(6, texture_binding()),
             ],
         });
         let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -231,10 +228,14 @@ impl GpuContext {
                 bind(0, &frame_buffer),
                 bind(1, &spot_buffer),
                 bind(2, &match_buffer),
+                bind_view(3, &map_views[0]),
+                bind_view(4, &map_views[1]),
+                bind_view(5, &map_views[2]),
+                bind_view(6, &map_views[3]),
             ],
         });
 
-        // Group 1: layer uniforms, colour map, tangent map, sampler.
+        // Group 1: layer uniforms, colour map, tangent map, sampler, density bands.
         let layer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("layer"),
             entries: &[
@@ -245,6 +246,7 @@ impl GpuContext {
                     3,
                     wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 ),
+                layout_entry(4, texture_binding()),
             ],
         });
         let sampler = |clamp_v: bool| {
@@ -264,10 +266,13 @@ impl GpuContext {
         };
         let shell_sampler = sampler(false);
         let fin_sampler = sampler(true);
+        // `layer`: the `LayerUniforms` of fur.wgsl, [index, max_shell, lookups,
+        // height_fraction, offset, clamp_v, lod_span, shell] (floats as their bits).
         let layer_group = |layer: [u32; 8],
                            colour: &wgpu::TextureView,
                            tangent: &wgpu::TextureView,
-                           sampler: &wgpu::Sampler| {
+                           sampler: &wgpu::Sampler,
+                           bands: &wgpu::TextureView| {
             let bytes: Vec<u8> = layer.iter().flat_map(|v| v.to_le_bytes()).collect();
             let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("layer"),
@@ -291,11 +296,18 @@ impl GpuContext {
                         binding: 3,
                         resource: wgpu::BindingResource::Sampler(sampler),
                     },
+                    bind_view(4, bands),
                 ],
             })
         };
 
+        // Shells: under level of detail only the layers with a span > 0 are drawn, their
+        // alpha compensated for the layers they stand for.
         let n = prepared.shell_count();
+        let lod = prepared.level_of_detail_at(time);
+        let spans: Vec<f32> = (0..n)
+            .map(|i| lod.as_ref().map_or(1.0, |l| l.spans[i]))
+            .collect();
         let mut shell_views = Vec::with_capacity(n);
         for i in 0..n {
             let (colour, tangent) = prepared.shell_textures(i).expect("layer in range");
@@ -307,9 +319,14 @@ impl GpuContext {
             &shell_views[0].0,
             &shell_views[0].1,
             &shell_sampler,
+            &placeholder,
         );
         let shell_groups: Vec<wgpu::BindGroup> = (0..n)
+            .filter(|&i| spans[i] > 0.0)
             .map(|i| {
+                let bands = prepared
+                    .shell_density(i)
+                    .map_or_else(|| placeholder.clone(), |b| self.upload(b));
                 let p = prepared.shell_layer_params(i as u32);
                 layer_group(
                     [
@@ -319,12 +336,13 @@ impl GpuContext {
                         p.height_fraction.to_bits(),
                         prepared.shell_offsets()[i].to_bits(),
                         0,
-                        0,
-                        0,
+                        spans[i].to_bits(),
+                        1,
                     ],
                     &shell_views[i].0,
                     &shell_views[i].1,
                     &shell_sampler,
+                    &bands,
                 )
             })
             .collect();
@@ -349,7 +367,9 @@ impl GpuContext {
         let mesh_buffer = self.vertex_buffer(&mesh_floats, "mesh");
         let index_buffer = self.index_buffer(&mesh.indices, "mesh indices");
         let mesh_index_count = (mesh.indices.len() * 3) as u32;
-        let fin = match prepared.fin_textures() {
+        // Fins; level of detail fades them (in the quads' fade) and leaves them out at 0.
+        let fins_drawn = lod.as_ref().is_none_or(|l| l.fin_fade != 0.0);
+        let fin = match prepared.fin_textures().filter(|_| fins_drawn) {
             Some((colour, tangent)) => {
                 let (quads, triangles) = prepared.fin_quads_at(time);
                 if triangles.is_empty() {
@@ -358,7 +378,7 @@ impl GpuContext {
                     let floats: Vec<f32> = quads
                         .iter()
                         .flat_map(|(p, f)| {
-                            let mut out = Vec::with_capacity(25);
+                            let mut out = Vec::with_capacity(FIN_FLOATS);
                             out.extend(p.to_array());
                             out.extend(f.uv.to_array());
                             out.extend(f.light.to_array());
@@ -369,15 +389,28 @@ impl GpuContext {
                             out.extend(f.normal.to_array());
                             out.extend(f.wind_uv.to_array());
                             out.extend(f.wind.to_array());
+                            out.extend(f.mesh_uv.to_array());
+                            out.push(f.length);
+                            out.extend(f.lean.to_array());
                             out
                         })
                         .collect();
                     let (colour, tangent) = (self.upload(colour), self.upload(tangent));
                     let group = layer_group(
-                        [max_shell, max_shell, 0, 1.0f32.to_bits(), 0, 1, 0, 0],
+                        [
+                            max_shell,
+                            max_shell,
+                            0,
+                            1.0f32.to_bits(),
+                            0,
+                            1,
+                            1.0f32.to_bits(),
+                            0,
+                        ],
                         &colour,
                         &tangent,
                         &fin_sampler,
+                        &placeholder,
                     );
                     Some((
                         self.vertex_buffer(&floats, "fins"),
@@ -402,7 +435,8 @@ impl GpuContext {
         ];
         let fin_attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x2, 2 => Float32x3, 3 => Float32x3, 4 => Float32x2,
-            5 => Float32, 6 => Float32x3, 7 => Float32x3, 8 => Float32x2, 9 => Float32x3
+            5 => Float32, 6 => Float32x3, 7 => Float32x3, 8 => Float32x2, 9 => Float32x3,
+            10 => Float32x2, 11 => Float32, 12 => Float32x3
         ];
         let mesh_vertex = wgpu::VertexBufferLayout {
             array_stride: 23 * 4,
@@ -410,7 +444,7 @@ impl GpuContext {
             attributes: &mesh_attributes,
         };
         let fin_vertex = wgpu::VertexBufferLayout {
-            array_stride: 25 * 4,
+            array_stride: (FIN_FLOATS * 4) as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &fin_attributes,
         };
@@ -680,6 +714,13 @@ impl GpuContext {
             })
     }
 
+    /// A 1×1 transparent texture bound where a layer or frame has no map.
+    fn placeholder(&self) -> wgpu::TextureView {
+        let texel =
+            crate::raster::Texture::from_rgba8(1, 1, vec![[0; 4]]).expect("a 1×1 texture is valid");
+        self.upload(&texel)
+    }
+
     /// Uploads a texture with the oracle's own mip chain.
     fn upload(&self, texture: &crate::raster::Texture) -> wgpu::TextureView {
         let levels = texture.level_count() as u32;
@@ -779,6 +820,13 @@ fn texture_binding() -> wgpu::BindingType {
         sample_type: wgpu::TextureSampleType::Float { filterable: true },
         view_dimension: wgpu::TextureViewDimension::D2,
         multisampled: false,
+    }
+}
+
+fn bind_view(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
     }
 }
 
@@ -882,6 +930,8 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
         Vec4::new(w.ambient, w.diffuse, w.specular, w.dampened),
         Vec4::new(w.shadow, 0.0, 0.0, 0.0),
     ];
+    let offset = prepared.object_offset_at(time).unwrap_or(Vec3::ZERO);
+    let lean = prepared.shared_lean_at(time);
     let mut bytes: Vec<u8> = view_proj
         .to_cols_array()
         .iter()
@@ -906,6 +956,24 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
     };
     let matches = shade.burn.as_ref().map_or(0, |b| b.matches.len()) as u32;
     for v in [tangents, debug, shade.spots.len() as u32, matches] {
+        bytes.extend(v.to_le_bytes());
+    }
+    for v in [
+        offset.extend(0.0),
+        lean.unwrap_or(Vec3::ZERO)
+            .extend(if lean.is_some() { 1.0 } else { 0.0 }),
+    ] {
+        bytes.extend(v.to_array().iter().flat_map(|c| c.to_le_bytes()));
+    }
+    let maps = prepared.maps();
+    // MAP_LENGTH, MAP_DENSITY, MAP_DIRECTION, MAP_COLOUR in fur.wgsl.
+    let present = u32::from(maps.length.is_some())
+        | u32::from(maps.density.is_some()) << 1
+        | u32::from(maps.direction.is_some()) << 2
+        | u32::from(maps.colour.is_some()) << 3;
+    let wrap =
+        |a: crate::scene::MapAddressSetting| u32::from(a == crate::scene::MapAddressSetting::Wrap);
+    for v in [present, wrap(s.maps.address[0]), wrap(s.maps.address[1]), 0] {
         bytes.extend(v.to_le_bytes());
     }
     bytes
