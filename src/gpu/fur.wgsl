@@ -540,7 +540,26 @@ fn lean_at(uv: vec2<f32>, tf: TangentFrame) -> vec3<f32> {
     return frame.lean.xyz + comb;
 }
 
-// lod_alpha: a layer standing for `span` layers, 1 − (1 − α)^span; span 1 keeps α as it is.
+// pow_whole: x^n for a whole n by square-and-multiply, lowest bit first (lod.rs pow_whole).
+fn pow_whole(x: f32, n: u32) -> f32 {
+    var result = 1.0;
+    var base = x;
+    var k = n;
+    loop {
+        if (k == 0u) {
+            break;
+        }
+        if ((k & 1u) == 1u) {
+            result = result * base;
+        }
+        base = base * base;
+        k = k >> 1u;
+    }
+    return result;
+}
+
+// lod_alpha: a layer standing for `span` layers, 1 − (1 − α)^span; span 1 keeps α as it is; a
+// whole span raises by pow_whole, a fractional one by pow.
 fn lod_alpha(alpha: f32, span: f32) -> f32 {
     if (span == 1.0) {
         return alpha;
@@ -552,6 +571,10 @@ fn lod_alpha(alpha: f32, span: f32) -> f32 {
     // pow(0, s) is outside WGSL's domain of pow (log2 of 0): an opaque texel stays opaque.
     if (a >= 1.0) {
         return 1.0;
+    }
+    let whole = u32(span);
+    if (f32(whole) == span) {
+        return 1.0 - pow_whole(1.0 - a, whole);
     }
     return 1.0 - pow(1.0 - a, span);
 }

@@ -17,7 +17,7 @@
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
 //! | beyond: maps | [`layer_within_length`], [`density_alpha`], [`density_band`], [`comb_lean`], [`tint_strand`] | `maps.rs` |
 //! | beyond: gravity, motion | [`gravity_lean`], [`path_position`], [`spring_impulse_response`], [`spring_lag`], [`lean_displacement`] | `motion.rs` |
-//! | beyond: level of detail | [`lod_fur_pixels`], [`lod_shell_level`], [`lod_layer_order`], [`lod_layer_spans`], [`lod_alpha`], [`lod_fin_fade`] | `lod.rs` |
+//! | beyond: level of detail | [`lod_fur_pixels`], [`lod_shell_level`], [`lod_layer_order`], [`lod_layer_spans`], [`lod_alpha`], [`pow_whole`], [`lod_fin_fade`] | `lod.rs` |
 //!
 //! # Calling a term from your own test
 //! Each term is a plain function, so a GPU port can check its shader line against it:
@@ -93,6 +93,7 @@ pub use lighting::{
 };
 pub use lod::{
     lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,
+    pow_whole,
 };
 pub use maps::{
     DENSITY_BANDS, comb_lean, density_alpha, density_band, layer_within_length, tint_strand,
