@@ -113,6 +113,20 @@ impl Texture {
         Ok(Texture { levels })
     }
 
+    /// The mip level `round(lod)` (clamped to the chain, NaN → 0) that
+    /// [`Sampler::sample_nearest_level`] reads.
+    #[inline]
+    pub fn nearest_level(&self, lod: f32) -> &MipLevel {
+        let max = (self.levels.len() - 1) as f32;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, max)
+        };
+        // lod is in [0, max]: adding 0.5 and truncating rounds half up.
+        &self.levels[(lod + 0.5) as usize]
+    }
+
     /// Number of mip levels (1 for a 1×1 texture).
     pub fn level_count(&self) -> usize {
         self.levels.len()
@@ -327,14 +341,15 @@ impl Sampler {
     /// read, for lookups that only ask whether a point is covered.
     #[inline]
     pub fn sample_nearest_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
-        let max = (texture.levels.len() - 1) as f32;
-        let lod = if lod.is_nan() {
-            0.0
-        } else {
-            lod.clamp(0.0, max)
-        };
-        // lod is in [0, max]: adding 0.5 and truncating rounds half up.
-        self.nearest(&texture.levels[(lod + 0.5) as usize], uv)
+        self.nearest(texture.nearest_level(lod), uv)
+    }
+
+    /// The nearest texel of `level` (from [`Texture::nearest_level`]): the same read as
+    /// [`Sampler::sample_nearest_level`] with the level chosen once, for a run of lookups at
+    /// one level of detail.
+    #[inline]
+    pub fn sample_nearest_in(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
+        self.nearest(level, uv)
     }
 
     #[inline]

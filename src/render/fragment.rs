@@ -448,13 +448,28 @@ pub fn shade_fur(
     let eye = v.eye.normalize_or_zero();
     // The thesis checks "if the according pixel is transparent": one texel per lookup. Wind
     // moves the fur above this layer further, so its displacement adds to the lookup (3.3.1).
-    let covered_at = |at: Vec2| match (density, textures.density) {
+    // The level is chosen once for all lookups of this fragment.
+    let offset = v.shadow + v.wind_uv;
+    let shadow = match (density, textures.density) {
         (Some(d), Some(bands)) => {
-            shading::density_alpha(sampler.sample_nearest_level(bands, at, lod), d)
+            let level = bands.nearest_level(lod);
+            shading::shell_shadow(
+                |at| shading::density_alpha(sampler.sample_nearest_in(level, at), d),
+                uv,
+                offset,
+                layer.lookups,
+            )
         }
-        _ => sampler.sample_nearest_level(colour_map, at, lod).w,
+        _ => {
+            let level = colour_map.nearest_level(lod);
+            shading::shell_shadow(
+                |at| sampler.sample_nearest_in(level, at).w,
+                uv,
+                offset,
+                layer.lookups,
+            )
+        }
     };
-    let shadow = shading::shell_shadow(covered_at, uv, v.shadow + v.wind_uv, layer.lookups);
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
         return Some(Vec4::new(g, g, g, alpha));
