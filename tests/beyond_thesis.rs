@@ -3,10 +3,10 @@
 //! with distance, gravity pulls the fur down, and motion is time-addressable.
 
 mod common;
-use common::scene;
+use common::{scene, scratch};
 
 use pelage::render::PreparedScene;
-use pelage::scene::{DebugView, GravitySettings, LodSettings, Scene};
+use pelage::scene::{DebugView, LodSettings, Scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -16,13 +16,6 @@ fn render(scene: &Scene) -> Vec<u8> {
         .render(64)
         .expect("renders")
         .rgba8
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("beyond-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch");
-    dir
 }
 
 /// A 2 × 2 map of one grey value (all four channels but alpha).
@@ -189,10 +182,11 @@ fn level_of_detail_changes_smoothly_with_distance() {
 #[test]
 fn gravity_pulls_the_fur_down() {
     let (width, height) = (240, 180);
-    let mut upright = scene("gravity", width, height);
+    // The scene's own gravity (strength 0.7) against none.
+    let pulled = scene("gravity", width, height);
+    assert!(pulled.gravity.is_some());
+    let mut upright = pulled.clone();
     upright.gravity = None;
-    let mut pulled = upright.clone();
-    pulled.gravity = Some(GravitySettings::default());
     // At the equator the fur stands out sideways; pulled down it droops (keeping its length), so
     // the furred sphere is narrower there, and no wider anywhere.
     let background = {

@@ -1,21 +1,11 @@
 //! The `pelage` binary as a user runs it: identical files for any thread count and tile size,
 //! bad input answered with exit status 2 and a one-line message naming what is wrong.
 
+mod common;
+use common::{pelage, scratch};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn pelage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pelage"))
-        .args(args)
-        .output()
-        .expect("pelage runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+use std::process::Output;
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);

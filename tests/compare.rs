@@ -2,21 +2,11 @@
 //! two different renders exit 1 and the heat map marks where they differ; images that cannot be
 //! compared (sizes differ, unreadable file) exit 2 with a message naming the file.
 
+mod common;
+use common::{pelage, scratch};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn pelage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pelage"))
-        .args(args)
-        .output()
-        .expect("pelage runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("compare-{name}"));
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+use std::process::Output;
 
 fn text(o: &Output) -> (String, String) {
     (

@@ -1,22 +1,10 @@
 //! `pelage sweep` and `pelage sweep-merge` as a user runs them: the folder's files, the CSV's
 //! points, shards that merge into the whole sweep, and bad parameters refused with exit 2.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
+use common::{pelage, scratch};
 
-fn pelage(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pelage"))
-        .args(args)
-        .output()
-        .expect("pelage runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sweep-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+use std::process::Output;
 
 /// A small, quick sweep: 2 × 2 points of the embedded torus at 96×72.
 fn sweep_args(out: &str) -> Vec<String> {

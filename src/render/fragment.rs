@@ -331,7 +331,7 @@ impl ShadeParams {
             spots,
             burn,
             wind_tangent_fraction: s.wind.as_ref().map_or(0.0, |w| w.tangent_fraction),
-            lean: s.gravity.is_some() || s.motion.is_some() || s.maps.direction.is_some(),
+            lean: s.leans(),
         }
     }
 

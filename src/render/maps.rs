@@ -119,14 +119,6 @@ impl SurfaceMaps {
         }
     }
 
-    /// Whether any map is loaded.
-    pub fn any(&self) -> bool {
-        self.length.is_some()
-            || self.density.is_some()
-            || self.direction.is_some()
-            || self.colour.is_some()
-    }
-
     /// A bilinear sample of `map` at mesh uv `uv` (see the module's convention).
     #[inline]
     pub fn sample(&self, map: &Texture, uv: Vec2) -> Vec4 {

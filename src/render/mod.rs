@@ -130,16 +130,15 @@ struct Bending {
 impl Bending {
     fn at(s: &Scene, time: f32) -> Bending {
         let wind = s.wind.as_ref().map(|w| w.direction_and_force(time));
-        let lean =
-            (s.gravity.is_some() || s.motion.is_some() || s.maps.direction.is_some()).then(|| {
-                let gravity = s.gravity.as_ref().map_or(Vec3::ZERO, |g| {
-                    crate::shading::gravity_lean(g.direction, g.strength)
-                });
-                let lag = s.motion.as_ref().map_or(Vec3::ZERO, |m| {
-                    crate::shading::spring_lag(&m.path, time, m.frequency, m.damping) * m.response
-                });
-                gravity + lag
+        let lean = s.leans().then(|| {
+            let gravity = s.gravity.as_ref().map_or(Vec3::ZERO, |g| {
+                crate::shading::gravity_lean(g.direction, g.strength)
             });
+            let lag = s.motion.as_ref().map_or(Vec3::ZERO, |m| {
+                crate::shading::spring_lag(&m.path, time, m.frequency, m.damping) * m.response
+            });
+            gravity + lag
+        });
         Bending { wind, lean }
     }
 
@@ -160,19 +159,14 @@ impl Bending {
         shared + comb
     }
 
-    /// Displacement of a layer at `fraction` of a strand `height` long at this vertex: the
-    /// thesis's wind alone ([`crate::shading::wind_displacement`]), or the wind's bend added
-    /// to the lean ([`crate::shading::lean_displacement`]).
-    fn displacement(
-        &self,
-        maps: &SurfaceMaps,
-        v: &mesh::Vertex,
-        fraction: f32,
-        height: f32,
-    ) -> Vec3 {
+    /// Displacement of a layer at `fraction` of a strand `height` long over a vertex with this
+    /// `normal` and this vertex's `lean` ([`Self::lean_at`]): the thesis's wind alone
+    /// ([`crate::shading::wind_displacement`]), or the wind's bend added to the lean
+    /// ([`crate::shading::lean_displacement`]).
+    fn displacement(&self, lean: Vec3, normal: Vec3, fraction: f32, height: f32) -> Vec3 {
         match (self.lean, self.wind) {
             (None, Some((direction, force))) => {
-                crate::shading::wind_displacement(direction, v.normal, force, fraction, height)
+                crate::shading::wind_displacement(direction, normal, force, fraction, height)
             }
             (None, None) => Vec3::ZERO,
             (Some(_), wind) => {
@@ -184,12 +178,7 @@ impl Bending {
                     };
                     d * f
                 });
-                crate::shading::lean_displacement(
-                    wind_bend + self.lean_at(maps, v),
-                    v.normal,
-                    fraction,
-                    height,
-                )
+                crate::shading::lean_displacement(wind_bend + lean, normal, fraction, height)
             }
         }
     }
@@ -524,8 +513,9 @@ impl PreparedScene {
                     // Wind (thesis 3.3) and lean: the layer moves with their part tangent to
                     // the surface, more the higher it is, pulled back along −n so the strand
                     // keeps its length.
+                    let lean = bending.lean_at(maps, v);
                     let displacement =
-                        bending.displacement(maps, v, layer.height_fraction, strand_height);
+                        bending.displacement(lean, v.normal, layer.height_fraction, strand_height);
                     let wind_uv = if bending.moves() {
                         crate::shading::wind_uv_offset(
                             displacement,
@@ -540,7 +530,7 @@ impl PreparedScene {
                         crate::shading::to_tangent_space(direction * force, &v.frame)
                     });
                     let lean = if bending.lean.is_some() {
-                        crate::shading::to_tangent_space(bending.lean_at(maps, v), &v.frame)
+                        crate::shading::to_tangent_space(lean, &v.frame)
                     } else {
                         Vec3::ZERO
                     };
@@ -757,15 +747,8 @@ impl PreparedScene {
             let top_of = |v: &mesh::Vertex| {
                 let length = maps.length_at(v.uv);
                 let height = self.fin_height * length;
-                let rise = if maps.length.is_some() {
-                    v.normal * height
-                } else {
-                    v.normal * self.fin_height
-                };
-                (
-                    v.position + rise + bending.displacement(maps, v, 1.0, height),
-                    length,
-                )
+                let bend = bending.displacement(bending.lean_at(maps, v), v.normal, 1.0, height);
+                (v.position + v.normal * height + bend, length)
             };
             let (a_top, a_length) = top_of(a);
             let (b_top, b_length) = top_of(b);

@@ -680,6 +680,12 @@ impl Default for MotionSettings {
 }
 
 impl Scene {
+    /// Whether something beyond the wind bends the fur (gravity, motion or a direction map):
+    /// layers then move by the combined lean ([`crate::shading::motion`]).
+    pub fn leans(&self) -> bool {
+        self.gravity.is_some() || self.motion.is_some() || self.maps.direction.is_some()
+    }
+
     /// Parses and validates scene text; `file` names it in errors, `base_dir` resolves paths.
     pub fn parse(text: &str, file: &str, base_dir: &Path) -> Result<Scene, SceneError> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| {
