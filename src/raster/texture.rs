@@ -209,24 +209,17 @@ pub struct Sampler {
     pub filter: Filter,
 }
 
-static UNORM8: [f32; 256] = {
-    let mut t = [0.0f32; 256];
-    let mut i = 0;
-    while i < 256 {
-        t[i] = i as f32 / 255.0;
-        i += 1;
-    }
-    t
-};
-
+/// `byte / 255` per channel: one packed conversion and one packed division, the same IEEE
+/// quotient as the scalar `f32::from(byte) / 255.0` (a table of the 256 quotients needed four
+/// lookups and inserts per texel).
 #[inline]
 fn to_vec4(t: [u8; 4]) -> Vec4 {
     Vec4::new(
-        UNORM8[t[0] as usize],
-        UNORM8[t[1] as usize],
-        UNORM8[t[2] as usize],
-        UNORM8[t[3] as usize],
-    )
+        f32::from(t[0]),
+        f32::from(t[1]),
+        f32::from(t[2]),
+        f32::from(t[3]),
+    ) / 255.0
 }
 
 #[inline]
