@@ -11,7 +11,7 @@ use super::bin::TileGrid;
 use super::clip::{ClipVertex, clip_triangle};
 use super::framebuffer::{Framebuffer, TileTarget};
 use super::setup::{CullMode, SetupTriangle, setup_triangle};
-use super::tile::{Fragment, RasterStats, rasterize_triangle};
+use super::tile::{Fragment, PerFragment, QuadShader, RasterStats, rasterize_triangle};
 use super::varyings::Varyings;
 use glam::Vec4;
 use rayon::prelude::*;
@@ -71,18 +71,18 @@ trait TileDraw: Send + Sync {
     fn triangle_count(&self) -> usize;
 }
 
-struct DrawCall<V, F> {
+struct DrawCall<V, S> {
     state: DrawState,
     triangles: Vec<SetupTriangle>,
     varyings: Vec<[V; 3]>,
     bins: Vec<Vec<u32>>,
-    fragment: F,
+    shader: S,
 }
 
-impl<V, F> TileDraw for DrawCall<V, F>
+impl<V, S> TileDraw for DrawCall<V, S>
 where
     V: Varyings,
-    F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
+    S: QuadShader<V>,
 {
     fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats) {
         for &t in &self.bins[tile] {
@@ -92,7 +92,7 @@ where
                 &self.triangles[t],
                 &self.varyings[t],
                 &self.state,
-                &self.fragment,
+                &self.shader,
                 target,
                 stats,
             );
@@ -149,6 +149,24 @@ impl<'fb, 'a> Frame<'fb, 'a> {
         VS: Fn(&I) -> ClipVertex<V> + Sync,
         FS: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync + 'a,
     {
+        self.draw_quads(vertices, triangles, state, vertex, PerFragment(fragment))
+    }
+
+    /// [`Frame::draw`] with a fragment stage that shades a quad at a time.
+    pub fn draw_quads<I, V, VS, S>(
+        &mut self,
+        vertices: &[I],
+        triangles: &[[u32; 3]],
+        state: DrawState,
+        vertex: VS,
+        shader: S,
+    ) -> Result<(), RasterError>
+    where
+        I: Sync,
+        V: Varyings + 'a,
+        VS: Fn(&I) -> ClipVertex<V> + Sync,
+        S: QuadShader<V> + 'a,
+    {
         if let Some((triangle, &index)) = triangles.iter().enumerate().find_map(|(t, tri)| {
             tri.iter()
                 .find(|&&i| i as usize >= vertices.len())
@@ -194,7 +212,7 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             triangles: set_up,
             varyings,
             bins,
-            fragment,
+            shader,
         }));
         if self.pending_triangles >= AUTO_FLUSH_TRIANGLES {
             self.flush();

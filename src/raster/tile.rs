@@ -1,5 +1,5 @@
 //! Tile rasterization: 2×2 quad traversal, perspective-correct interpolation, the depth test,
-//! the fragment closure and blending, for one triangle inside one tile.
+//! the fragment stage (one [`QuadShader`] call per quad) and blending, for one triangle inside one tile.
 //!
 //! Invariant: every pixel of a tile is written by exactly one thread, and a tile's triangles are
 //! processed strictly in submission order, so the result is independent of the thread count and
@@ -69,6 +69,92 @@ impl<'q, V: Varyings> Fragment<'q, V> {
     }
 }
 
+/// One 2×2 quad as the fragment stage sees it: the four lanes' interpolated varyings (helper
+/// lanes outside the triangle included, for derivatives) and depths.
+pub struct Quad<'q, V> {
+    /// Pixel column of lane 0 (even).
+    pub x: u32,
+    /// Pixel row of lane 0 (even).
+    pub y: u32,
+    /// Interpolated NDC depth of each lane.
+    pub depth: [f32; 4],
+    /// Whether the triangle runs counter-clockwise in NDC.
+    pub front_facing: bool,
+    varyings: &'q [V; 4],
+}
+
+impl<'q, V: Varyings> Quad<'q, V> {
+    /// Builds a quad by hand, for testing quad shaders without rasterizing.
+    pub fn new(x: u32, y: u32, depth: [f32; 4], varyings: &'q [V; 4]) -> Self {
+        Quad {
+            x,
+            y,
+            depth,
+            front_facing: true,
+            varyings,
+        }
+    }
+
+    /// The interpolated varyings of every lane.
+    #[inline]
+    pub fn varyings(&self) -> &'q [V; 4] {
+        self.varyings
+    }
+
+    /// Lane `lane` (0..4) as a single fragment.
+    #[inline]
+    pub fn fragment(&self, lane: usize) -> Fragment<'q, V> {
+        let lane = lane.min(3);
+        Fragment {
+            x: self.x + (lane as u32 & 1),
+            y: self.y + (lane as u32 >> 1),
+            depth: self.depth[lane],
+            front_facing: self.front_facing,
+            lane,
+            quad: self.varyings,
+        }
+    }
+
+    /// Coarse screen-space derivatives, the same for every lane (see [`Fragment::derivatives`]).
+    #[inline]
+    pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
+        self.fragment(0).derivatives(f)
+    }
+}
+
+/// The fragment stage of a draw, one quad at a time, so a shader can share per-quad work (the
+/// level of detail of coarse derivatives) and batch independent lanes through its costliest
+/// terms.
+///
+/// Contract: lane `k` of the result is the colour of lane `k` (or `None` to discard it), and
+/// depends only on the quad and the lane — never on which other lanes are in `lanes` — so a
+/// quad shader gives the same pixels as shading each lane alone.
+pub trait QuadShader<V>: Send + Sync {
+    /// Shades the lanes whose bits are set in `lanes` (bit k = lane k is covered and passed the
+    /// depth test); the other lanes' results are ignored.
+    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32) -> [Option<Vec4>; 4];
+}
+
+/// A per-fragment closure as a [`QuadShader`]: called once per lane in the mask.
+pub struct PerFragment<F>(pub F);
+
+impl<V, F> QuadShader<V> for PerFragment<F>
+where
+    V: Varyings,
+    F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
+{
+    #[inline]
+    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32) -> [Option<Vec4>; 4] {
+        std::array::from_fn(|lane| {
+            if lanes & (1 << lane) == 0 {
+                None
+            } else {
+                (self.0)(&quad.fragment(lane))
+            }
+        })
+    }
+}
+
 /// Counters kept per tile and summed in tile order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RasterStats {
@@ -94,28 +180,28 @@ impl std::ops::AddAssign for RasterStats {
 /// per-fragment depth test, depth write and blend carry no run-time dispatch; every other state
 /// takes the general copy. All copies compute the same values.
 #[inline]
-pub(crate) fn rasterize_triangle<V, F>(
+pub(crate) fn rasterize_triangle<V, S>(
     tri: &SetupTriangle,
     varyings: &[V; 3],
     state: &DrawState,
-    shader: &F,
+    shader: &S,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
     V: Varyings,
-    F: Fn(&Fragment<V>) -> Option<Vec4>,
+    S: QuadShader<V>,
 {
     use {BlendMode as B, DepthCompare as D};
     match (state.depth_compare, state.blend, state.depth_write) {
         // Blended layers over an opaque base (shells, fins): test, no write.
-        (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, F, LESS_EQUAL, ALPHA, NO>(
+        (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, S, LESS_EQUAL, ALPHA, NO>(
             tri, varyings, state, shader, target, stats,
         ),
         // Opaque geometry.
         (D::Less, B::Replace, true) => {
-            rasterize_quads::<V, F, LESS, REPLACE, YES>(tri, varyings, state, shader, target, stats)
+            rasterize_quads::<V, S, LESS, REPLACE, YES>(tri, varyings, state, shader, target, stats)
         }
-        _ => rasterize_quads::<V, F, DYNAMIC, DYNAMIC, DYNAMIC>(
+        _ => rasterize_quads::<V, S, DYNAMIC, DYNAMIC, DYNAMIC>(
             tri, varyings, state, shader, target, stats,
         ),
     }
@@ -131,16 +217,16 @@ const NO: u8 = 1;
 const YES: u8 = 2;
 
 #[inline(always)]
-fn rasterize_quads<V, F, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
+fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     tri: &SetupTriangle,
     varyings: &[V; 3],
     state: &DrawState,
-    shader: &F,
+    shader: &S,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
     V: Varyings,
-    F: Fn(&Fragment<V>) -> Option<Vec4>,
+    S: QuadShader<V>,
 {
     let Some(r) = tri.bounds.intersect(&target.rect) else {
         return;
@@ -222,11 +308,13 @@ fn rasterize_quads<V, F, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
             }
             let quad_index = (qy - tile.y0) as usize * tile_width + (qx - tile.x0) as usize;
             let lane_offsets = [0, 1, tile_width, tile_width + 1];
+            // The depth test of all lanes first: lanes are distinct pixels, so testing them
+            // before any is written is the same as testing each just before shading it.
+            let mut passed = 0u32;
             for lane in 0..4 {
                 if mask & (1 << lane) == 0 {
                     continue;
                 }
-                let (x, y) = (qx + (lane as u32 & 1), qy + (lane as u32 >> 1));
                 let index = quad_index + lane_offsets[lane];
                 let depth_z = z[lane];
                 let pass = match DEPTH {
@@ -238,29 +326,36 @@ fn rasterize_quads<V, F, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                         DepthCompare::LessEqual => depth_z <= target.depth[index],
                     },
                 };
-                if !pass {
-                    continue;
-                }
-                shaded += 1;
-                let fragment = Fragment {
-                    x,
-                    y,
-                    depth: depth_z,
+                passed |= u32::from(pass) << lane;
+            }
+            if passed == 0 {
+                qx += 2;
+                continue;
+            }
+            shaded += u64::from(passed.count_ones());
+            let colours = shader.shade_quad(
+                &Quad {
+                    x: qx,
+                    y: qy,
+                    depth: z,
                     front_facing: tri.front_facing,
-                    lane,
-                    quad: &quad,
-                };
-                let Some(colour) = shader(&fragment) else {
+                    varyings: &quad,
+                },
+                passed,
+            );
+            for (lane, colour) in colours.into_iter().enumerate() {
+                let Some(colour) = colour.filter(|_| passed & (1 << lane) != 0) else {
                     continue;
                 };
                 written += 1;
+                let index = quad_index + lane_offsets[lane];
                 let write_depth = match WRITE {
                     NO => false,
                     YES => true,
                     _ => state.depth_write,
                 };
                 if write_depth {
-                    target.depth[index] = depth_z;
+                    target.depth[index] = z[lane];
                 }
                 let dst = &mut target.colour[index];
                 let mode = match BLEND {

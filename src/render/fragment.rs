@@ -14,7 +14,7 @@
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::level_of_detail;
-use crate::raster::{Fragment, Sampler, Texture, Varyings};
+use crate::raster::{Fragment, Quad, QuadShader, Sampler, Texture, Varyings};
 use crate::scene::{DebugView, Scene, SpotKind};
 use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents};
 use glam::{Vec2, Vec3, Vec4};
@@ -361,7 +361,8 @@ pub struct LayerMaps<'a> {
     pub shell: bool,
 }
 
-/// Shades one fur fragment of a shell (or fin) layer; `None` discards it.
+/// Shades one fur fragment of a shell (or fin) layer; `None` discards it. This is the scalar
+/// twin of [`shade_fur_quad`], which the renderer runs: both give the same bits.
 ///
 /// Beyond the thesis, in this order: a shell layer above the painted length is dropped
 /// ([`shading::layer_within_length`]; fins are not cut, their height follows the length at
@@ -378,10 +379,184 @@ pub fn shade_fur(
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Option<Vec4> {
-    let v = f.varyings();
+    let (ddx, ddy) = f.derivatives(|v| v.uv);
+    let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
+    match surface(f.varyings(), lod, textures, maps, layer, p) {
+        Surface::Discarded => None,
+        Surface::Finished(colour) => Some(colour),
+        Surface::Lit(lit) => {
+            let lighting = shading::strand_lighting(
+                lit.tangent,
+                Vec3::Z,
+                lit.light,
+                lit.eye,
+                p.exponents,
+                p.tangents,
+                p.tangent_shift,
+            );
+            Some(lit.colour(lighting, p))
+        }
+    }
+}
+
+/// Shades the lanes of one quad set in `lanes` (see [`QuadShader`]): lane by lane the same bits
+/// as [`shade_fur`]. The level of detail of the quad's coarse derivatives is computed once, and
+/// the lit lanes' powers go through [`shading::strand_lighting_x4`] together.
+#[inline]
+pub fn shade_fur_quad(
+    quad: &Quad<'_, FurVaryings>,
+    lanes: u32,
+    textures: LayerMaps<'_>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> [Option<Vec4>; 4] {
+    let (ddx, ddy) = quad.derivatives(|v| v.uv);
+    let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
+    let varyings = quad.varyings();
+    let mut out = [None; 4];
+    let mut lit = [None; 4];
+    for lane in 0..4 {
+        if lanes & (1 << lane) == 0 {
+            continue;
+        }
+        match surface(&varyings[lane], lod, textures, maps, layer, p) {
+            Surface::Discarded => {}
+            Surface::Finished(colour) => out[lane] = Some(colour),
+            Surface::Lit(l) => lit[lane] = Some(l),
+        }
+    }
+    let Some(&first) = lit.iter().flatten().next() else {
+        return out;
+    };
+    // Lanes with nothing to light repeat a lit one: their results are dropped below.
+    let inputs = lit.map(|l| l.unwrap_or(first));
+    let lighting = shading::strand_lighting_x4(
+        inputs.map(|l| l.tangent),
+        [Vec3::Z; 4],
+        inputs.map(|l| l.light),
+        inputs.map(|l| l.eye),
+        p.exponents,
+        p.tangents,
+        p.tangent_shift,
+    );
+    for lane in 0..4 {
+        if let Some(l) = &lit[lane] {
+            out[lane] = Some(l.colour(lighting[lane], p));
+        }
+    }
+    out
+}
+
+/// Which implementation of the fur fragment stage a frame runs. Both give the same bits; the
+/// golden tests render every scene with both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FragmentStage {
+    /// [`shade_fur_quad`]: a quad at a time (what the renderer runs).
+    #[default]
+    Quad,
+    /// [`shade_fur`] on each lane alone: the scalar twin, the plain statement of the shader.
+    ScalarTwin,
+}
+
+/// The fur fragment stage of one layer as a [`QuadShader`].
+#[derive(Clone, Copy)]
+pub struct FurShader<'a> {
+    /// The layer's textures and sampler.
+    pub textures: LayerMaps<'a>,
+    /// The surface maps.
+    pub maps: &'a SurfaceMaps,
+    /// The layer.
+    pub layer: LayerParams,
+    /// The frame's shading parameters.
+    pub params: &'a ShadeParams,
+    /// Which implementation runs.
+    pub stage: FragmentStage,
+}
+
+impl QuadShader<FurVaryings> for FurShader<'_> {
+    #[inline]
+    fn shade_quad(&self, quad: &Quad<'_, FurVaryings>, lanes: u32) -> [Option<Vec4>; 4] {
+        if self.stage == FragmentStage::ScalarTwin {
+            return std::array::from_fn(|lane| {
+                (lanes & (1 << lane) != 0)
+                    .then(|| {
+                        shade_fur(
+                            &quad.fragment(lane),
+                            self.textures,
+                            self.maps,
+                            &self.layer,
+                            self.params,
+                        )
+                    })
+                    .flatten()
+            });
+        }
+        shade_fur_quad(
+            quad,
+            lanes,
+            self.textures,
+            self.maps,
+            &self.layer,
+            self.params,
+        )
+    }
+}
+
+/// How far [`surface`] took a fragment.
+enum Surface {
+    /// Discarded (burnt, above the painted length, transparent).
+    Discarded,
+    /// A debug view's colour, final.
+    Finished(Vec4),
+    /// Ready for strand lighting.
+    Lit(LitSurface),
+}
+
+/// Everything eq. 3.7 needs of one fragment besides the strand lighting.
+#[derive(Clone, Copy)]
+struct LitSurface {
+    alpha: f32,
+    strand: Vec3,
+    tangent: Vec3,
+    light: Vec3,
+    eye: Vec3,
+    shadow: f32,
+}
+
+impl LitSurface {
+    /// The dampened specular (3.2.3) and eq. 3.7, with this fragment's alpha.
+    #[inline(always)]
+    fn colour(&self, lighting: shading::StrandLighting, p: &ShadeParams) -> Vec4 {
+        let dampened = shading::dampened_specular(lighting.specular_to_dampen);
+        shading::final_colour(
+            self.strand,
+            p.light_colour,
+            p.ambient,
+            lighting.diffuse,
+            lighting.specular,
+            dampened,
+            self.shadow,
+            &p.weights,
+        )
+        .extend(self.alpha)
+    }
+}
+
+/// Steps 1–6 of the module's list for one fragment at level of detail `lod`: everything up to
+/// the strand lighting.
+#[inline(always)]
+fn surface(
+    v: &FurVaryings,
+    lod: f32,
+    textures: LayerMaps<'_>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> Surface {
     let burn = p.burn_outcome(v.normal, layer);
     if burn == BurnOutcome::Burnt {
-        return None;
+        return Surface::Discarded;
     }
     if textures.shell
         && let Some(length_map) = &maps.length
@@ -391,7 +566,7 @@ pub fn shade_fur(
             maps.sample(length_map, v.mesh_uv).x,
         )
     {
-        return None;
+        return Surface::Discarded;
     }
     let LayerMaps {
         colour: colour_map,
@@ -400,8 +575,6 @@ pub fn shade_fur(
         ..
     } = textures;
     let uv = v.uv - v.wind_uv;
-    let (ddx, ddy) = f.derivatives(|v| v.uv);
-    let lod = level_of_detail(ddx, ddy, colour_map.width(), colour_map.height());
     let (texel, encoded) = sampler.sample_level_pair(colour_map, tangent_map, uv, lod);
     let density = maps.density.as_ref().map(|m| maps.sample(m, v.mesh_uv).x);
     let coverage = match (density, textures.density) {
@@ -412,13 +585,13 @@ pub fn shade_fur(
     let alpha = shading::lod_alpha(coverage * v.fade, layer.lod_span);
     // NaN alpha is discarded too.
     if alpha.is_nan() || alpha < ALPHA_DISCARD {
-        return None;
+        return Surface::Discarded;
     }
     if p.debug_view == DebugView::Tangents {
-        return Some(encoded.truncate().extend(alpha));
+        return Surface::Finished(encoded.truncate().extend(alpha));
     }
     if p.debug_view == DebugView::Alpha {
-        return Some(Vec4::new(1.0, 1.0, 1.0, alpha));
+        return Surface::Finished(Vec4::new(1.0, 1.0, 1.0, alpha));
     }
     let mut strand = texel.truncate();
     if let Some(tint) = &maps.colour {
@@ -472,27 +645,14 @@ pub fn shade_fur(
     };
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
-        return Some(Vec4::new(g, g, g, alpha));
+        return Surface::Finished(Vec4::new(g, g, g, alpha));
     }
-    let lighting = shading::strand_lighting(
+    Surface::Lit(LitSurface {
+        alpha,
+        strand,
         tangent,
-        Vec3::Z,
         light,
         eye,
-        p.exponents,
-        p.tangents,
-        p.tangent_shift,
-    );
-    let dampened = shading::dampened_specular(lighting.specular_to_dampen);
-    let colour = shading::final_colour(
-        strand,
-        p.light_colour,
-        p.ambient,
-        lighting.diffuse,
-        lighting.specular,
-        dampened,
         shadow,
-        &p.weights,
-    );
-    Some(colour.extend(alpha))
+    })
 }

@@ -23,7 +23,7 @@ use crate::raster::{
     Framebuffer, RasterError, RasterStats, Sampler, Texture,
 };
 use crate::scene::{MeshKind, Scene, ShellSpacingSetting};
-use fragment::{FurVaryings, LayerMaps, LayerParams, ShadeParams};
+use fragment::{FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, ShadeParams};
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
 
@@ -401,11 +401,27 @@ impl PreparedScene {
     /// Draws one frame at `time` (seconds) with the given tile size. Frame `k` of an animation
     /// at `fps` frames per second is `render_at(k as f32 / fps as f32, …)`.
     pub fn render_at(&self, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
-        self.draw(&self.scene, time, tile_size)
+        self.draw(&self.scene, time, tile_size, FragmentStage::Quad)
+    }
+
+    /// [`Self::render_at`] with the fur fragment stage's scalar twin ([`fragment::shade_fur`],
+    /// one fragment at a time): the same bytes, slower. For checking the quad stage.
+    pub fn render_scalar_twin_at(
+        &self,
+        time: f32,
+        tile_size: u32,
+    ) -> Result<RenderedImage, RenderError> {
+        self.draw(&self.scene, time, tile_size, FragmentStage::ScalarTwin)
     }
 
     /// One frame of `s`, whose seed, mesh and fur are those of the bake (see [`Self::render_with`]).
-    fn draw(&self, s: &Scene, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
+    fn draw(
+        &self,
+        s: &Scene,
+        time: f32,
+        tile_size: u32,
+        stage: FragmentStage,
+    ) -> Result<RenderedImage, RenderError> {
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
         let camera = Camera {
@@ -501,7 +517,7 @@ impl PreparedScene {
             // Triangles whose fur is surely burnt away on this layer are not drawn at all: the
             // image is the same, and burnt fur costs nothing (thesis table 4.6).
             let kept = self.unburnt_triangles(shade, layer.index, max_shell);
-            frame.draw(
+            frame.draw_quads(
                 &self.mesh.vertices,
                 kept.as_deref().unwrap_or(&self.mesh.indices),
                 blended,
@@ -562,8 +578,12 @@ impl PreparedScene {
                         },
                     }
                 },
-                move |f| {
-                    fragment::shade_fur(f, textures.maps(shell_sampler, true), maps, &layer, shade)
+                FurShader {
+                    textures: textures.maps(shell_sampler, true),
+                    maps,
+                    layer,
+                    params: shade,
+                    stage,
                 },
             )?;
         }
@@ -588,7 +608,7 @@ impl PreparedScene {
                 height_fraction: 1.0,
                 lod_span: 1.0,
             };
-            frame.draw(
+            frame.draw_quads(
                 &vertices,
                 &triangles,
                 DrawState {
@@ -599,8 +619,12 @@ impl PreparedScene {
                     position: view_proj * p.extend(1.0),
                     varyings: v,
                 },
-                move |f| {
-                    fragment::shade_fur(f, fin.maps(fin_sampler, false), maps, &fin_layer, shade)
+                FurShader {
+                    textures: fin.maps(fin_sampler, false),
+                    maps,
+                    layer: fin_layer,
+                    params: shade,
+                    stage,
                 },
             )?;
         }
@@ -915,6 +939,11 @@ impl PreparedScene {
         time: f32,
         tile_size: u32,
     ) -> Result<RenderedImage, RenderError> {
-        self.draw(&self.with_draw_settings(settings), time, tile_size)
+        self.draw(
+            &self.with_draw_settings(settings),
+            time,
+            tile_size,
+            FragmentStage::Quad,
+        )
     }
 }

@@ -90,15 +90,11 @@ pub fn strand_lighting(
     tangents: SpecularTangents,
     shift: f32,
 ) -> StrandLighting {
-    let t = tangent.normalize_or_zero();
-    let l = light.normalize_or_zero();
-    let e = eye.normalize_or_zero();
-    let diffuse_base = cos_sin_unit(t, l).1;
-    let centre = specular_base_unit(t, l, e);
+    let bases = LightingBases::new(tangent, normal, light, eye, tangents, shift);
     match tangents {
         SpecularTangents::One => {
             let [diffuse, specular, specular_to_dampen, _] = pow01_x4(
-                [diffuse_base, centre, centre, 0.0],
+                [bases.diffuse, bases.centre, bases.centre, 0.0],
                 [exponents.banks, exponents.specular, exponents.dampened, 1.0],
             );
             StrandLighting {
@@ -108,11 +104,8 @@ pub fn strand_lighting(
             }
         }
         SpecularTangents::Three => {
-            let n = normal.normalize_or_zero();
-            let up = specular_base_unit(shift_tangent(t, n, shift), l, e);
-            let down = specular_base_unit(shift_tangent(t, n, -shift), l, e);
             let [diffuse, centre_specular, specular_to_dampen, up_specular] = pow01_x4(
-                [diffuse_base, centre, centre, up],
+                [bases.diffuse, bases.centre, bases.centre, bases.up],
                 [
                     exponents.banks,
                     exponents.specular,
@@ -120,14 +113,110 @@ pub fn strand_lighting(
                     exponents.specular,
                 ],
             );
-            let down_specular = pow01(down, exponents.specular);
+            let down_specular = pow01(bases.down, exponents.specular);
             StrandLighting {
                 diffuse,
-                specular: (centre_specular + up_specular + down_specular) / 3.0,
+                specular: mean_of_three(centre_specular, up_specular, down_specular),
                 specular_to_dampen,
             }
         }
     }
+}
+
+/// [`strand_lighting`] for four independent fragments (a quad), lane by lane bit-identical to
+/// it: the bases are the same per lane, and each power is taken by lanes of four of the same
+/// exponent, three (one tangent) or five (three tangents) batches for the whole quad instead
+/// of four or eight. The batches are independent chains the processor can overlap.
+#[inline]
+pub fn strand_lighting_x4(
+    tangent: [Vec3; 4],
+    normal: [Vec3; 4],
+    light: [Vec3; 4],
+    eye: [Vec3; 4],
+    exponents: LightingExponents,
+    tangents: SpecularTangents,
+    shift: f32,
+) -> [StrandLighting; 4] {
+    let bases: [LightingBases; 4] = std::array::from_fn(|lane| {
+        LightingBases::new(
+            tangent[lane],
+            normal[lane],
+            light[lane],
+            eye[lane],
+            tangents,
+            shift,
+        )
+    });
+    let powers = |base: fn(&LightingBases) -> f32, exponent: f32| {
+        pow01_x4(bases.each_ref().map(base), [exponent; 4])
+    };
+    let diffuse = powers(|b| b.diffuse, exponents.banks);
+    let centre_specular = powers(|b| b.centre, exponents.specular);
+    let specular_to_dampen = powers(|b| b.centre, exponents.dampened);
+    let specular = match tangents {
+        SpecularTangents::One => centre_specular,
+        SpecularTangents::Three => {
+            let up = powers(|b| b.up, exponents.specular);
+            let down = powers(|b| b.down, exponents.specular);
+            std::array::from_fn(|lane| mean_of_three(centre_specular[lane], up[lane], down[lane]))
+        }
+    };
+    std::array::from_fn(|lane| StrandLighting {
+        diffuse: diffuse[lane],
+        specular: specular[lane],
+        specular_to_dampen: specular_to_dampen[lane],
+    })
+}
+
+/// The bases of the powers of one fragment's strand lighting, from the inputs normalised once:
+/// `sin(t, l)` (eq. 2.5), the specular base of eq. 2.7 for the tangent and, with three
+/// tangents, for the two shifted ones (0 with one tangent).
+#[derive(Clone, Copy)]
+struct LightingBases {
+    diffuse: f32,
+    centre: f32,
+    up: f32,
+    down: f32,
+}
+
+impl LightingBases {
+    #[inline(always)]
+    fn new(
+        tangent: Vec3,
+        normal: Vec3,
+        light: Vec3,
+        eye: Vec3,
+        tangents: SpecularTangents,
+        shift: f32,
+    ) -> Self {
+        let t = tangent.normalize_or_zero();
+        let l = light.normalize_or_zero();
+        let e = eye.normalize_or_zero();
+        let diffuse = cos_sin_unit(t, l).1;
+        let centre = specular_base_unit(t, l, e);
+        let (up, down) = match tangents {
+            SpecularTangents::One => (0.0, 0.0),
+            SpecularTangents::Three => {
+                let n = normal.normalize_or_zero();
+                (
+                    specular_base_unit(shift_tangent(t, n, shift), l, e),
+                    specular_base_unit(shift_tangent(t, n, -shift), l, e),
+                )
+            }
+        };
+        LightingBases {
+            diffuse,
+            centre,
+            up,
+            down,
+        }
+    }
+}
+
+/// The three-tangent specular of eq. 3.5: the mean of the three lobes, summed in this order.
+#[inline(always)]
+fn mean_of_three(centre: f32, up: f32, down: f32) -> f32 {
+    (centre + up + down) / 3.0
 }
 
 /// How many tangents the specular term of eq. 3.5 uses (thesis table 4.4: 1 or 3).
@@ -348,6 +437,49 @@ mod tests {
                     [want.diffuse, want.specular, want.specular_to_dampen].map(f32::to_bits),
                     "{t} {l} {e} {exponents:?} {tangents:?}: {got:?} vs {want:?}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn strand_lighting_x4_is_bit_identical_to_four_single_calls() {
+        let mut rng = Lcg::new(15);
+        let special = [Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::X, -Vec3::Z];
+        for k in 0..2000 {
+            let mut pick = |i: usize| {
+                if k % 13 == i {
+                    special[k % special.len()]
+                } else {
+                    rng.cube()
+                }
+            };
+            let (t, n, l, e): ([Vec3; 4], [Vec3; 4], [Vec3; 4], [Vec3; 4]) = (
+                std::array::from_fn(|_| pick(0)),
+                std::array::from_fn(|_| pick(1)),
+                std::array::from_fn(|_| pick(2)),
+                std::array::from_fn(|_| pick(3)),
+            );
+            let exponents = LightingExponents {
+                banks: [BANKS_EXPONENT, 1.0, 2.0, 0.5][k % 4],
+                specular: rng.range(1.0, 120.0),
+                dampened: [rng.range(1.0, 40.0), f32::NAN, 0.0][k % 3],
+            };
+            let shift = rng.range(-0.5, 0.5);
+            for tangents in [SpecularTangents::One, SpecularTangents::Three] {
+                let quad = strand_lighting_x4(t, n, l, e, exponents, tangents, shift);
+                for lane in 0..4 {
+                    let single = strand_lighting(
+                        t[lane], n[lane], l[lane], e[lane], exponents, tangents, shift,
+                    );
+                    let bits = |s: StrandLighting| {
+                        [s.diffuse, s.specular, s.specular_to_dampen].map(f32::to_bits)
+                    };
+                    assert_eq!(
+                        bits(quad[lane]),
+                        bits(single),
+                        "lane {lane} of {t:?} {l:?} {e:?} {exponents:?} {tangents:?}"
+                    );
+                }
             }
         }
     }

@@ -86,6 +86,7 @@ pub use burn::{BURN_THRESHOLD, BurnOutcome, BurnSchedule, burn_exponent, burn_ru
 pub use kajiya_kay::{
     BANKS_EXPONENT, LightingExponents, SpecularTangents, StrandLighting, kajiya_kay_diffuse,
     kajiya_kay_specular, shift_tangent, specular_with_tangents, strand_lighting,
+    strand_lighting_x4,
 };
 pub use lighting::{
     DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
