@@ -16,7 +16,7 @@ use super::maps::SurfaceMaps;
 use crate::raster::texture::level_of_detail;
 use crate::raster::{Fragment, Quad, QuadShader, Sampler, Texture, Varyings};
 use crate::scene::{DebugView, Scene, SpotKind};
-use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents};
+use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents, Vec3x4};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Alpha below which a fur texel is discarded before any shading (half of the smallest
@@ -386,10 +386,10 @@ pub fn shade_fur(
         Surface::Finished(colour) => Some(colour),
         Surface::Lit(lit) => {
             let lighting = shading::strand_lighting(
-                lit.tangent,
+                lit.tangent(layer, p),
                 Vec3::Z,
-                lit.light,
-                lit.eye,
+                lit.light.normalize_or_zero(),
+                lit.eye.normalize_or_zero(),
                 p.exponents,
                 p.tangents,
                 p.tangent_shift,
@@ -431,11 +431,18 @@ pub fn shade_fur_quad(
     };
     // Lanes with nothing to light repeat a lit one: their results are dropped below.
     let inputs = lit.map(|l| l.unwrap_or(first));
+    let lanes_of = |field: fn(&LitSurface) -> Vec3| Vec3x4::from_lanes(inputs.map(|l| field(&l)));
     let lighting = shading::strand_lighting_x4(
-        inputs.map(|l| l.tangent),
-        [Vec3::Z; 4],
-        inputs.map(|l| l.light),
-        inputs.map(|l| l.eye),
+        &lit_tangents_x4(
+            &lanes_of(|l| l.encoded_tangent),
+            &lanes_of(|l| l.wind),
+            &lanes_of(|l| l.lean),
+            layer,
+            p,
+        ),
+        &Vec3x4::splat(Vec3::Z),
+        &lanes_of(|l| l.light).normalize_or_zero(),
+        &lanes_of(|l| l.eye).normalize_or_zero(),
         p.exponents,
         p.tangents,
         p.tangent_shift,
@@ -513,18 +520,82 @@ enum Surface {
     Lit(LitSurface),
 }
 
-/// Everything eq. 3.7 needs of one fragment besides the strand lighting.
+/// Everything eq. 3.7 needs of one fragment: the strand lighting's inputs as interpolated or
+/// read (the tangent still encoded, the vectors not normalised), and the rest.
 #[derive(Clone, Copy)]
 struct LitSurface {
     alpha: f32,
     strand: Vec3,
-    tangent: Vec3,
+    shadow: f32,
+    encoded_tangent: Vec3,
+    wind: Vec3,
+    lean: Vec3,
     light: Vec3,
     eye: Vec3,
-    shadow: f32,
+}
+
+/// Step 5: the strand tangent decoded from its texel, bent by a fraction of the wind that
+/// grows up the strand (3.3.1) and then by the lean.
+#[inline(always)]
+fn lit_tangent(
+    encoded: Vec3,
+    wind: Vec3,
+    lean: Vec3,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> Vec3 {
+    let tangent = (encoded * 2.0 - Vec3::ONE).normalize_or(Vec3::Z);
+    let tangent = if p.wind_tangent_fraction > 0.0 {
+        shading::bend_tangent(
+            tangent,
+            wind,
+            layer.height_fraction * p.wind_tangent_fraction,
+        )
+    } else {
+        tangent
+    };
+    if p.lean {
+        shading::bend_tangent(tangent, lean, layer.height_fraction)
+    } else {
+        tangent
+    }
+}
+
+/// [`lit_tangent`] on the four lanes of a quad, lane by lane the same bits.
+#[inline(always)]
+fn lit_tangents_x4(
+    encoded: &Vec3x4,
+    wind: &Vec3x4,
+    lean: &Vec3x4,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> Vec3x4 {
+    let tangent = encoded
+        .scale_minus_one(2.0)
+        .normalize_or(&Vec3x4::splat(Vec3::Z));
+    let tangent = if p.wind_tangent_fraction > 0.0 {
+        shading::bend_tangent_x4(
+            &tangent,
+            wind,
+            layer.height_fraction * p.wind_tangent_fraction,
+        )
+    } else {
+        tangent
+    };
+    if p.lean {
+        shading::bend_tangent_x4(&tangent, lean, layer.height_fraction)
+    } else {
+        tangent
+    }
 }
 
 impl LitSurface {
+    /// [`lit_tangent`] of this fragment.
+    #[inline(always)]
+    fn tangent(&self, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
+        lit_tangent(self.encoded_tangent, self.wind, self.lean, layer, p)
+    }
+
     /// The dampened specular (3.2.3) and eq. 3.7, with this fragment's alpha.
     #[inline(always)]
     fn colour(&self, lighting: shading::StrandLighting, p: &ShadeParams) -> Vec4 {
@@ -602,23 +673,6 @@ fn surface(
         strand = shading::apply_spot(strand, colour, weight);
     }
     let strand = burn.strand_colour(strand);
-    let tangent = (encoded.truncate() * 2.0 - Vec3::ONE).normalize_or(Vec3::Z);
-    let tangent = if p.wind_tangent_fraction > 0.0 {
-        shading::bend_tangent(
-            tangent,
-            v.wind,
-            layer.height_fraction * p.wind_tangent_fraction,
-        )
-    } else {
-        tangent
-    };
-    let tangent = if p.lean {
-        shading::bend_tangent(tangent, v.lean, layer.height_fraction)
-    } else {
-        tangent
-    };
-    let light = v.light.normalize_or_zero();
-    let eye = v.eye.normalize_or_zero();
     // The thesis checks "if the according pixel is transparent": one texel per lookup. Wind
     // moves the fur above this layer further, so its displacement adds to the lookup (3.3.1).
     // The level is chosen once for all lookups of this fragment.
@@ -650,9 +704,11 @@ fn surface(
     Surface::Lit(LitSurface {
         alpha,
         strand,
-        tangent,
-        light,
-        eye,
         shadow,
+        encoded_tangent: encoded.truncate(),
+        wind: v.wind,
+        lean: v.lean,
+        light: v.light,
+        eye: v.eye,
     })
 }

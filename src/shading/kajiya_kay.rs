@@ -2,8 +2,9 @@
 //! between tangent and light, raised to Banks's exponent; specular from the reflection cone,
 //! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
+use super::lanes::{LANES, Vec3x4};
 use super::numeric::{finite_or_zero, pow01, pow01_x4};
-use super::tangent_space::cos_sin_unit;
+use super::tangent_space::{cos_sin_unit, cos_sin_unit_x4};
 use glam::Vec3;
 
 /// Banks's exponent on the Kajiya–Kay diffuse term, 4.8 (thesis 3.2.3: "the dampening is done
@@ -124,47 +125,50 @@ pub fn strand_lighting(
 }
 
 /// [`strand_lighting`] for four independent fragments (a quad), lane by lane bit-identical to
-/// it: the bases are the same per lane, and each power is taken by lanes of four of the same
-/// exponent, three (one tangent) or five (three tangents) batches for the whole quad instead
-/// of four or eight. The batches are independent chains the processor can overlap.
+/// it: the bases are computed on the four lanes at once ([`Vec3x4`], the same operations per
+/// lane), and each power is taken by lanes of four of the same exponent, three (one tangent)
+/// or five (three tangents) batches for the whole quad instead of four or eight.
 #[inline]
 pub fn strand_lighting_x4(
-    tangent: [Vec3; 4],
-    normal: [Vec3; 4],
-    light: [Vec3; 4],
-    eye: [Vec3; 4],
+    tangent: &Vec3x4,
+    normal: &Vec3x4,
+    light: &Vec3x4,
+    eye: &Vec3x4,
     exponents: LightingExponents,
     tangents: SpecularTangents,
     shift: f32,
-) -> [StrandLighting; 4] {
-    let bases: [LightingBases; 4] = std::array::from_fn(|lane| {
-        LightingBases::new(
-            tangent[lane],
-            normal[lane],
-            light[lane],
-            eye[lane],
-            tangents,
-            shift,
-        )
-    });
-    let powers = |base: fn(&LightingBases) -> f32, exponent: f32| {
-        pow01_x4(bases.each_ref().map(base), [exponent; 4])
+) -> [StrandLighting; LANES] {
+    let t = tangent.normalize_or_zero();
+    let l = light.normalize_or_zero();
+    let e = eye.normalize_or_zero();
+    let (cos_tl, sin_tl) = cos_sin_unit_x4(&t, &l);
+    let specular_base = |t: &Vec3x4, (cl, sl): ([f32; LANES], [f32; LANES])| {
+        let (ce, se) = cos_sin_unit_x4(t, &e);
+        std::array::from_fn::<f32, LANES, _>(|i| cl[i] * ce[i] + sl[i] * se[i])
     };
-    let diffuse = powers(|b| b.diffuse, exponents.banks);
-    let centre_specular = powers(|b| b.centre, exponents.specular);
-    let specular_to_dampen = powers(|b| b.centre, exponents.dampened);
+    let centre = specular_base(&t, (cos_tl, sin_tl));
+    let diffuse = pow01_x4(sin_tl, [exponents.banks; LANES]);
+    let centre_specular = pow01_x4(centre, [exponents.specular; LANES]);
+    let specular_to_dampen = pow01_x4(centre, [exponents.dampened; LANES]);
     let specular = match tangents {
         SpecularTangents::One => centre_specular,
         SpecularTangents::Three => {
-            let up = powers(|b| b.up, exponents.specular);
-            let down = powers(|b| b.down, exponents.specular);
-            std::array::from_fn(|lane| mean_of_three(centre_specular[lane], up[lane], down[lane]))
+            let n = normal.normalize_or_zero();
+            let shifted = |shift: f32| {
+                let t = t
+                    .add_scaled([finite_or_zero(shift); LANES], &n)
+                    .normalize_or_zero();
+                specular_base(&t, cos_sin_unit_x4(&t, &l))
+            };
+            let up = pow01_x4(shifted(shift), [exponents.specular; LANES]);
+            let down = pow01_x4(shifted(-shift), [exponents.specular; LANES]);
+            std::array::from_fn(|i| mean_of_three(centre_specular[i], up[i], down[i]))
         }
     };
-    std::array::from_fn(|lane| StrandLighting {
-        diffuse: diffuse[lane],
-        specular: specular[lane],
-        specular_to_dampen: specular_to_dampen[lane],
+    std::array::from_fn(|i| StrandLighting {
+        diffuse: diffuse[i],
+        specular: specular[i],
+        specular_to_dampen: specular_to_dampen[i],
     })
 }
 
@@ -466,7 +470,15 @@ mod tests {
             };
             let shift = rng.range(-0.5, 0.5);
             for tangents in [SpecularTangents::One, SpecularTangents::Three] {
-                let quad = strand_lighting_x4(t, n, l, e, exponents, tangents, shift);
+                let quad = strand_lighting_x4(
+                    &Vec3x4::from_lanes(t),
+                    &Vec3x4::from_lanes(n),
+                    &Vec3x4::from_lanes(l),
+                    &Vec3x4::from_lanes(e),
+                    exponents,
+                    tangents,
+                    shift,
+                );
                 for lane in 0..4 {
                     let single = strand_lighting(
                         t[lane], n[lane], l[lane], e[lane], exponents, tangents, shift,

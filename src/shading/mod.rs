@@ -72,6 +72,7 @@ mod numeric;
 mod test_support;
 
 pub mod kajiya_kay;
+pub mod lanes;
 pub mod lighting;
 pub mod lod;
 pub mod maps;
@@ -88,6 +89,7 @@ pub use kajiya_kay::{
     kajiya_kay_specular, shift_tangent, specular_with_tangents, strand_lighting,
     strand_lighting_x4,
 };
+pub use lanes::{LANES, Vec3x4};
 pub use lighting::{
     DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
     dampened_specular, final_colour,
@@ -110,5 +112,6 @@ pub use spots::{
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{
-    VIBRATION_RATIO, WindParams, bend_tangent, wind_displacement, wind_force, wind_uv_offset,
+    VIBRATION_RATIO, WindParams, bend_tangent, bend_tangent_x4, wind_displacement, wind_force,
+    wind_uv_offset,
 };

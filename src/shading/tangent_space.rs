@@ -2,6 +2,7 @@
 //! they meet the strand tangents stored in the shell textures in the same space; and the angle
 //! helpers the Kajiya–Kay terms are built from.
 
+use super::lanes::{LANES, Vec3x4};
 use crate::mesh::frame::TangentFrame;
 use glam::Vec3;
 
@@ -28,6 +29,23 @@ pub(crate) fn cos_sin_unit(a: Vec3, b: Vec3) -> (f32, f32) {
     }
     let c = a.dot(b).clamp(-1.0, 1.0);
     (c, (1.0 - c * c).max(0.0).sqrt())
+}
+
+/// [`cos_sin_unit`] on four lanes, lane by lane the same bits.
+#[inline(always)]
+pub(crate) fn cos_sin_unit_x4(a: &Vec3x4, b: &Vec3x4) -> ([f32; LANES], [f32; LANES]) {
+    let dot = a.dot(b);
+    let (a_zero, b_zero) = (a.is_zero(), b.is_zero());
+    let mut cos = [0.0; LANES];
+    let mut sin = [0.0; LANES];
+    for i in 0..LANES {
+        let c = dot[i].clamp(-1.0, 1.0);
+        let s = (1.0 - c * c).max(0.0).sqrt();
+        let zero = a_zero[i] || b_zero[i];
+        cos[i] = if zero { 0.0 } else { c };
+        sin[i] = if zero { 0.0 } else { s };
+    }
+    (cos, sin)
 }
 
 /// Sine of the angle between `a` and `b`, in `[0, 1]`: both are normalised inside, then
@@ -118,6 +136,29 @@ pub(crate) mod tests {
                 sin_tol(expected),
                 "sin_between",
             );
+        }
+    }
+
+    #[test]
+    fn cos_sin_unit_x4_is_four_single_calls_bit_for_bit() {
+        let mut rng = Lcg::new(44);
+        for k in 0..3000 {
+            let a = crate::shading::lanes::tests::lanes(&mut rng, k);
+            let b = crate::shading::lanes::tests::lanes(&mut rng, k + 2);
+            let unit =
+                |v: [Vec3; LANES]| v.map(|v| if k % 2 == 0 { v.normalize_or_zero() } else { v });
+            let (a, b) = (unit(a), unit(b));
+            let (cos, sin) = cos_sin_unit_x4(&Vec3x4::from_lanes(a), &Vec3x4::from_lanes(b));
+            for i in 0..LANES {
+                let (c, s) = cos_sin_unit(a[i], b[i]);
+                assert_eq!(
+                    [cos[i].to_bits(), sin[i].to_bits()],
+                    [c.to_bits(), s.to_bits()],
+                    "{:?} {:?}",
+                    a[i],
+                    b[i]
+                );
+            }
         }
     }
 

@@ -3,6 +3,7 @@
 //! the wind's surface-tangent part, scaled by the layer, pulled back along −normal so the strand
 //! keeps its length); the fragment-stage reverse lookup offset and the bent tangent.
 
+use super::lanes::{LANES, Vec3x4};
 use super::numeric::{finite_or_zero, saturate};
 use super::projection::{Axis, project_to_uv_dropping};
 use core::f32::consts::TAU;
@@ -131,6 +132,14 @@ pub fn wind_uv_offset(displacement: Vec3, normal: Vec3, dpdu: Vec3, dpdv: Vec3) 
 pub fn bend_tangent(tangent: Vec3, wind_tangent_space: Vec3, fraction: f32) -> Vec3 {
     (tangent + finite_or_zero(fraction) * wind_tangent_space)
         .normalize_or(tangent.normalize_or_zero())
+}
+
+/// [`bend_tangent`] on four lanes with one fraction, lane by lane the same bits.
+#[inline(always)]
+pub fn bend_tangent_x4(tangent: &Vec3x4, wind_tangent_space: &Vec3x4, fraction: f32) -> Vec3x4 {
+    tangent
+        .add_scaled([finite_or_zero(fraction); LANES], wind_tangent_space)
+        .normalize_or(&tangent.normalize_or_zero())
 }
 
 #[cfg(test)]
@@ -319,6 +328,28 @@ mod tests {
             wind_uv_offset(Vec3::splat(f32::NAN), Vec3::Z, du, dv),
             Vec2::ZERO
         );
+    }
+
+    #[test]
+    fn bend_tangent_x4_is_four_single_bends_bit_for_bit() {
+        let mut rng = Lcg::new(43);
+        for k in 0..3000 {
+            let t = crate::shading::lanes::tests::lanes(&mut rng, k);
+            let w = crate::shading::lanes::tests::lanes(&mut rng, k + 4);
+            let fraction = [rng.range(0.0, 1.0), 0.0, f32::NAN, -3.0][k % 4];
+            let bent = bend_tangent_x4(&Vec3x4::from_lanes(t), &Vec3x4::from_lanes(w), fraction);
+            for i in 0..LANES {
+                assert_eq!(
+                    bent.lane(i).to_array().map(f32::to_bits),
+                    bend_tangent(t[i], w[i], fraction)
+                        .to_array()
+                        .map(f32::to_bits),
+                    "{:?} {:?} {fraction}",
+                    t[i],
+                    w[i]
+                );
+            }
+        }
     }
 
     #[test]
