@@ -345,14 +345,25 @@ impl Sampler {
         self.nearest(level, uv)
     }
 
+    /// The alpha of [`Sampler::sample_nearest_in`]: the same value, converting one byte.
+    #[inline]
+    pub fn alpha_nearest_in(&self, level: &MipLevel, uv: Vec2) -> f32 {
+        f32::from(self.nearest_texel(level, uv)[3]) / 255.0
+    }
+
     #[inline]
     fn nearest(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
+        to_vec4(self.nearest_texel(level, uv))
+    }
+
+    #[inline]
+    fn nearest_texel(&self, level: &MipLevel, uv: Vec2) -> [u8; 4] {
         let x = floor_small(texel_coordinate(uv.x * level.width as f32));
         let y = floor_small(texel_coordinate(uv.y * level.height as f32));
-        to_vec4(level.texel(
+        level.texel(
             address(x, level.width, self.address_u),
             address(y, level.height, self.address_v),
-        ))
+        )
     }
 
     #[inline]
@@ -539,6 +550,36 @@ mod tests {
                     (f64::from(got[c]) - e).abs() < 1e-6,
                     "uv ({u},{v}) c{c}: {} vs {e}",
                     got[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn alpha_nearest_is_the_alpha_of_the_nearest_texel() {
+        let texels = (0..64u32 * 32)
+            .map(|i| [(i % 251) as u8, (i % 7) as u8, 0, (i * 37 % 256) as u8])
+            .collect();
+        let t = Texture::from_rgba8(64, 32, texels).expect("texture");
+        for (k, level) in [0usize, 1, 3].into_iter().enumerate() {
+            let level = t.level(level).expect("level");
+            let sampler = Sampler {
+                address_u: [AddressMode::Wrap, AddressMode::Clamp][k % 2],
+                address_v: AddressMode::Wrap,
+                filter: Filter::Nearest,
+            };
+            for i in 0..2000 {
+                let u = (i as f32 * 0.618_034).fract() * 3.0 - 1.0;
+                let v = (i as f32 * 0.414_213_5).fract() * 2.0 - 0.5;
+                let uv = match i % 50 {
+                    0 => Vec2::new(f32::NAN, v),
+                    1 => Vec2::new(u, f32::INFINITY),
+                    _ => Vec2::new(u, v),
+                };
+                assert_eq!(
+                    sampler.alpha_nearest_in(level, uv).to_bits(),
+                    sampler.sample_nearest_in(level, uv).w.to_bits(),
+                    "{uv}"
                 );
             }
         }

@@ -690,7 +690,7 @@ fn surface(
         _ => {
             let level = colour_map.nearest_level(lod);
             shading::shell_shadow(
-                |at| sampler.sample_nearest_in(level, at).w,
+                |at| sampler.alpha_nearest_in(level, at),
                 uv,
                 offset,
                 layer.lookups,
