@@ -209,6 +209,17 @@ pub struct Sampler {
     pub filter: Filter,
 }
 
+/// `byte / 255` for every byte, for reading one channel: a load instead of a division.
+static UNORM8: [f32; 256] = {
+    let mut table = [0.0f32; 256];
+    let mut i = 0;
+    while i < 256 {
+        table[i] = i as f32 / 255.0;
+        i += 1;
+    }
+    table
+};
+
 /// `byte / 255` per channel: one packed conversion and one packed division, the same IEEE
 /// quotient as the scalar `f32::from(byte) / 255.0` (a table of the 256 quotients needed four
 /// lookups and inserts per texel).
@@ -348,7 +359,7 @@ impl Sampler {
     /// The alpha of [`Sampler::sample_nearest_in`]: the same value, converting one byte.
     #[inline]
     pub fn alpha_nearest_in(&self, level: &MipLevel, uv: Vec2) -> f32 {
-        f32::from(self.nearest_texel(level, uv)[3]) / 255.0
+        UNORM8[usize::from(self.nearest_texel(level, uv)[3])]
     }
 
     #[inline]
