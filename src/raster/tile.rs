@@ -126,13 +126,14 @@ impl<'q, V: Varyings> Quad<'q, V> {
 /// level of detail of coarse derivatives) and batch independent lanes through its costliest
 /// terms.
 ///
-/// Contract: lane `k` of the result is the colour of lane `k` (or `None` to discard it), and
-/// depends only on the quad and the lane — never on which other lanes are in `lanes` — so a
-/// quad shader gives the same pixels as shading each lane alone.
+/// Contract: the colour given for lane `k` depends only on the quad and the lane — never on
+/// which other lanes are in `lanes` — so a quad shader gives the same pixels as shading each
+/// lane alone.
 pub trait QuadShader<V>: Send + Sync {
     /// Shades the lanes whose bits are set in `lanes` (bit k = lane k is covered and passed the
-    /// depth test); the other lanes' results are ignored.
-    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32) -> [Option<Vec4>; 4];
+    /// depth test) and calls `write(k, colour)` at most once for each lane it keeps, only for
+    /// lanes in `lanes`; a lane not written is discarded.
+    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, write: impl FnMut(usize, Vec4));
 }
 
 /// A per-fragment closure as a [`QuadShader`]: called once per lane in the mask.
@@ -144,14 +145,14 @@ where
     F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
 {
     #[inline]
-    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32) -> [Option<Vec4>; 4] {
-        std::array::from_fn(|lane| {
-            if lanes & (1 << lane) == 0 {
-                None
-            } else {
-                (self.0)(&quad.fragment(lane))
+    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, mut write: impl FnMut(usize, Vec4)) {
+        for lane in 0..4 {
+            if lanes & (1 << lane) != 0
+                && let Some(colour) = (self.0)(&quad.fragment(lane))
+            {
+                write(lane, colour);
             }
-        })
+        }
     }
 }
 
@@ -333,20 +334,18 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 continue;
             }
             shaded += u64::from(passed.count_ones());
-            let colours = shader.shade_quad(
-                &Quad {
-                    x: qx,
-                    y: qy,
-                    depth: z,
-                    front_facing: tri.front_facing,
-                    varyings: &quad,
-                },
-                passed,
-            );
-            for (lane, colour) in colours.into_iter().enumerate() {
-                let Some(colour) = colour.filter(|_| passed & (1 << lane) != 0) else {
-                    continue;
-                };
+            let quad_view = Quad {
+                x: qx,
+                y: qy,
+                depth: z,
+                front_facing: tri.front_facing,
+                varyings: &quad,
+            };
+            shader.shade_quad(&quad_view, passed, |lane, colour| {
+                debug_assert!(
+                    passed & (1 << lane) != 0,
+                    "a quad shader wrote lane {lane} outside its mask"
+                );
                 written += 1;
                 let index = quad_index + lane_offsets[lane];
                 let write_depth = match WRITE {
@@ -364,7 +363,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                     _ => state.blend,
                 };
                 *dst = blend(mode, colour, *dst);
-            }
+            });
             qx += 2;
         }
     }

@@ -483,9 +483,22 @@ pub struct FurShader<'a> {
 
 impl QuadShader<FurVaryings> for FurShader<'_> {
     #[inline]
-    fn shade_quad(&self, quad: &Quad<'_, FurVaryings>, lanes: u32) -> [Option<Vec4>; 4] {
-        if self.stage == FragmentStage::ScalarTwin {
-            return std::array::from_fn(|lane| {
+    fn shade_quad(
+        &self,
+        quad: &Quad<'_, FurVaryings>,
+        lanes: u32,
+        mut write: impl FnMut(usize, Vec4),
+    ) {
+        let colours = match self.stage {
+            FragmentStage::Quad => shade_fur_quad(
+                quad,
+                lanes,
+                self.textures,
+                self.maps,
+                &self.layer,
+                self.params,
+            ),
+            FragmentStage::ScalarTwin => std::array::from_fn(|lane| {
                 (lanes & (1 << lane) != 0)
                     .then(|| {
                         shade_fur(
@@ -497,16 +510,13 @@ impl QuadShader<FurVaryings> for FurShader<'_> {
                         )
                     })
                     .flatten()
-            });
+            }),
+        };
+        for (lane, colour) in colours.into_iter().enumerate() {
+            if let Some(colour) = colour {
+                write(lane, colour);
+            }
         }
-        shade_fur_quad(
-            quad,
-            lanes,
-            self.textures,
-            self.maps,
-            &self.layer,
-            self.params,
-        )
     }
 }
 
