@@ -1,4 +1,4 @@
-//! The fur fragment closure: the thesis's fragment shader (3.2–3.4) as Rust, composed from the
+//! The fur fragment stage: the thesis's fragment shader (3.2–3.4) as Rust, composed from the
 //! pure terms in [`crate::shading`], in this order:
 //!
 //! 1. burning (3.4): the matches' lobe intensity `I` and the burn rule for this layer; a burnt
@@ -11,6 +11,11 @@
 //! 6. the shell self-shadow (3.2.2): each lookup reads the alpha of one texel, the nearest on
 //!    the mip level nearest the level of detail, along the shadow offset plus the wind's;
 //! 7. Kajiya–Kay diffuse and specular, the dampened specular, and eq. 3.7.
+//!
+//! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
+//! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
+//! steps 1–4 and 6 lane by lane, then steps 5 and 7 on the quad's lit lanes together
+//! ([`crate::shading::lanes`]). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::level_of_detail;
