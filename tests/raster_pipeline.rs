@@ -42,8 +42,8 @@ fn checker_texture(size: u32, check: u32) -> Texture {
 }
 
 /// 10,000 overlapping, alpha-blended, textured triangles with perspective and near-plane
-/// crossings.
-fn busy_frame(width: u32, height: u32, tile: u32) -> Vec<u8> {
+/// crossings, submitted as `draws` consecutive draws.
+fn busy_frame(width: u32, height: u32, tile: u32, draws: usize) -> Vec<u8> {
     let mut rng = Lcg(42);
     let mut vertices = Vec::new();
     let mut centre = Vec2::ZERO;
@@ -66,23 +66,25 @@ fn busy_frame(width: u32, height: u32, tile: u32) -> Vec<u8> {
     let sampler = Sampler::default();
     let mut fb = Framebuffer::new(width, height, tile, Vec4::new(0.1, 0.1, 0.1, 1.0)).expect("fb");
     let mut frame = Frame::new(&mut fb);
-    frame
-        .draw(
-            &vertices,
-            &triangles,
-            BLENDED,
-            |&(p, c, uv): &(Vec4, Vec4, Vec2)| ClipVertex {
-                position: p,
-                varyings: (c, uv),
-            },
-            |f| {
-                let (c, uv) = *f.varyings();
-                let (dx, dy) = f.derivatives(|v| v.1);
-                let t = sampler.sample(&texture, uv, dx, dy);
-                Some(Vec4::new(c.x * t.x, c.y, c.z * (1.0 - t.y), c.w))
-            },
-        )
-        .expect("draw");
+    for part in triangles.chunks(triangles.len().div_ceil(draws)) {
+        frame
+            .draw(
+                &vertices,
+                part,
+                BLENDED,
+                |&(p, c, uv): &(Vec4, Vec4, Vec2)| ClipVertex {
+                    position: p,
+                    varyings: (c, uv),
+                },
+                |f| {
+                    let (c, uv) = *f.varyings();
+                    let (dx, dy) = f.derivatives(|v| v.1);
+                    let t = sampler.sample(&texture, uv, dx, dy);
+                    Some(Vec4::new(c.x * t.x, c.y, c.z * (1.0 - t.y), c.w))
+                },
+            )
+            .expect("draw");
+    }
     let stats = frame.finish();
     assert!(stats.fragments_written > 50_000, "{stats:?}");
     fb.to_rgba8()
@@ -91,16 +93,30 @@ fn busy_frame(width: u32, height: u32, tile: u32) -> Vec<u8> {
 #[test]
 fn output_is_identical_for_every_thread_count_and_tile_size() {
     let (w, h) = (203, 151);
-    let reference = busy_frame(w, h, 64);
+    let reference = busy_frame(w, h, 64, 1);
     for threads in [1, 2, 3, 8] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("pool");
         for tile in [8, 16, 32, 64] {
-            let image = pool.install(|| busy_frame(w, h, tile));
+            let image = pool.install(|| busy_frame(w, h, tile, 1));
             assert!(image == reference, "threads {threads}, tile {tile} differ");
         }
+    }
+}
+
+/// A large draw is set up and binned in several parallel chunks; many small draws (one chunk
+/// each) of the same triangles give the same bytes, so the chunks replay in triangle order.
+#[test]
+fn output_is_identical_however_triangles_are_split_into_draws_and_chunks() {
+    let (w, h) = (203, 151);
+    let one_draw = busy_frame(w, h, 16, 1);
+    for draws in [3, 40] {
+        assert!(
+            busy_frame(w, h, 16, draws) == one_draw,
+            "{draws} draws differ from one"
+        );
     }
 }
 

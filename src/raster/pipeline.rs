@@ -71,11 +71,19 @@ trait TileDraw: Send + Sync {
     fn triangle_count(&self) -> usize;
 }
 
-struct DrawCall<V, S> {
-    state: DrawState,
+/// A run of consecutive triangles of a draw, set up and binned by one task.
+struct SetUpChunk<V> {
     triangles: Vec<SetupTriangle>,
     varyings: Vec<[V; 3]>,
+    /// Per tile, the indices into `triangles` that touch it, ascending.
     bins: Vec<Vec<u32>>,
+}
+
+struct DrawCall<V, S> {
+    state: DrawState,
+    /// In triangle order: a tile replays chunk 0's triangles, then chunk 1's, …, which is the
+    /// draw's triangle order whatever the chunking.
+    chunks: Vec<SetUpChunk<V>>,
     shader: S,
 }
 
@@ -85,28 +93,38 @@ where
     S: QuadShader<V>,
 {
     fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats) {
-        for &t in &self.bins[tile] {
-            let t = t as usize;
-            stats.triangles += 1;
-            rasterize_triangle(
-                &self.triangles[t],
-                &self.varyings[t],
-                &self.state,
-                &self.shader,
-                target,
-                stats,
-            );
+        for chunk in &self.chunks {
+            for &t in &chunk.bins[tile] {
+                let t = t as usize;
+                stats.triangles += 1;
+                rasterize_triangle(
+                    &chunk.triangles[t],
+                    &chunk.varyings[t],
+                    &self.state,
+                    &self.shader,
+                    target,
+                    stats,
+                );
+            }
         }
     }
 
     fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        self.chunks.iter().map(|c| c.triangles.len()).sum()
     }
 }
 
 /// Pending set-up triangles above which a draw flushes the frame, bounding memory. Flushing
 /// never changes the image.
 const AUTO_FLUSH_TRIANGLES: usize = 1 << 20;
+
+/// A draw's triangles are set up and binned in up to this many parallel tasks, of at least
+/// [`MIN_SETUP_CHUNK`] triangles each...
+const SETUP_TASKS: usize = 8;
+const MIN_SETUP_CHUNK: usize = 1024;
+/// ...and fewer with many tiles: each task keeps a list per tile, and tasks × tiles stays under
+/// this (so small tiles on a large image cost no more list headers than one task did).
+const TASK_TILE_LISTS: usize = 1 << 16;
 
 /// One frame being drawn into a framebuffer.
 pub struct Frame<'fb, 'a> {
@@ -182,36 +200,35 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             vertices.par_iter().with_min_len(256).map(&vertex).collect();
         let grid = self.grid();
         let (width, height) = (grid.width, grid.height);
-        let chunks: Vec<Vec<(SetupTriangle, [V; 3])>> = triangles
-            .par_chunks(1024)
+        let tasks = SETUP_TASKS.min(TASK_TILE_LISTS / grid.tile_count()).max(1);
+        let chunk_len = triangles.len().div_ceil(tasks).max(MIN_SETUP_CHUNK);
+        let chunks: Vec<SetUpChunk<V>> = triangles
+            .par_chunks(chunk_len)
             .map(|chunk| {
-                let mut out = Vec::with_capacity(chunk.len());
+                let mut set_up = SetUpChunk {
+                    triangles: Vec::with_capacity(chunk.len()),
+                    varyings: Vec::with_capacity(chunk.len()),
+                    bins: vec![Vec::new(); grid.tile_count()],
+                };
                 for tri in chunk {
                     let clip = tri.map(|i| shaded[i as usize]);
                     clip_triangle(clip, |clipped| {
-                        if let Some(s) = setup_triangle(&clipped, width, height, state.cull) {
-                            out.push(s);
+                        if let Some((tri, v)) = setup_triangle(&clipped, width, height, state.cull)
+                        {
+                            grid.bin(&mut set_up.bins, set_up.triangles.len() as u32, &tri.bounds);
+                            set_up.triangles.push(tri);
+                            set_up.varyings.push(v);
                         }
                     });
                 }
-                out
+                set_up
             })
             .collect();
-        let count: usize = chunks.iter().map(Vec::len).sum();
-        let mut set_up = Vec::with_capacity(count);
-        let mut varyings = Vec::with_capacity(count);
-        let mut bins = vec![Vec::new(); grid.tile_count()];
-        for (tri, v) in chunks.into_iter().flatten() {
-            grid.bin(&mut bins, set_up.len() as u32, &tri.bounds);
-            set_up.push(tri);
-            varyings.push(v);
-        }
+        let count: usize = chunks.iter().map(|c| c.triangles.len()).sum();
         self.pending_triangles += count;
         self.pending.push(Box::new(DrawCall {
             state,
-            triangles: set_up,
-            varyings,
-            bins,
+            chunks,
             shader,
         }));
         if self.pending_triangles >= AUTO_FLUSH_TRIANGLES {
