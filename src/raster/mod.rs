@@ -1,8 +1,9 @@
 //! The software rasterizer. It knows nothing about fur.
 //!
 //! A [`Frame`] takes draw calls — vertices, triangles, a vertex closure returning clip-space
-//! positions and [`Varyings`], a fragment closure returning a colour or a discard — and
-//! rasterizes them into a tiled [`Framebuffer`]. The stages, one file each:
+//! positions and [`Varyings`], a fragment closure returning a colour or a discard (or a
+//! [`QuadShader`] shading a 2×2 quad at a time) — and rasterizes them into a tiled
+//! [`Framebuffer`]. The stages, one file each:
 //! [`clip`] (homogeneous clipping, guard band) → [`setup`] (fixed point, edge functions,
 //! top-left rule) → [`bin`] (tiles and their triangle lists) → [`tile`] (2×2 quads,
 //! interpolation, depth, blend), with [`texture`] for mip-mapped sampling.

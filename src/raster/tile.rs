@@ -161,7 +161,7 @@ where
 pub struct RasterStats {
     /// Triangles handed to the rasterizer after clipping and culling.
     pub triangles: u64,
-    /// Fragments that passed the depth test and ran the fragment closure.
+    /// Fragments that passed the depth test and ran the fragment stage.
     pub fragments_shaded: u64,
     /// Fragments the closure did not discard, written to the framebuffer.
     pub fragments_written: u64,
