@@ -5,7 +5,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use pelage::camera::{look_at, perspective};
 use pelage::raster::{
     AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
-    Framebuffer, Sampler, Texture,
+    Framebuffer, Quad, QuadShader, Sampler, Texture,
 };
 
 const BLENDED: DrawState = DrawState {
@@ -147,6 +147,80 @@ fn draw_layers(layers: &[(f32, Vec4)], state: DrawState) -> Framebuffer {
     }
     frame.finish();
     fb
+}
+
+/// A quad shader that breaks its contract: it writes every lane, covered or not, twice.
+struct Greedy;
+
+impl QuadShader<Vec4> for Greedy {
+    fn shade_quad(&self, quad: &Quad<'_, Vec4>, _lanes: u32, mut write: impl FnMut(usize, Vec4)) {
+        for _ in 0..2 {
+            for (lane, colour) in quad.varyings().iter().enumerate() {
+                write(lane, *colour);
+            }
+        }
+    }
+}
+
+/// The rasterizer keeps each covered lane's first write and ignores the rest, so a faulty quad
+/// shader blends nothing twice and reaches no pixel outside the triangle or behind the depth.
+#[test]
+fn quad_shader_writes_are_limited_to_covered_lanes_once() {
+    let draw = |greedy: bool| {
+        let mut fb = Framebuffer::new(21, 17, 8, Vec4::new(0.0, 0.0, 0.0, 1.0)).expect("fb");
+        let mut frame = Frame::new(&mut fb);
+        let (v, t) = full_screen_quad(0.2, Vec4::new(0.0, 0.0, 1.0, 1.0));
+        // An opaque occluder over the left part, then a blended sliver that crosses it.
+        let occluder: Vec<(Vec4, Vec4)> = v
+            .iter()
+            .map(|&(p, c)| (Vec4::new(p.x.min(-0.3), p.y, p.z, p.w), c))
+            .collect();
+        frame
+            .draw(
+                &occluder,
+                &t,
+                DrawState::default(),
+                |&(p, c): &(Vec4, Vec4)| ClipVertex {
+                    position: p,
+                    varyings: c,
+                },
+                |f| Some(*f.varyings()),
+            )
+            .expect("occluder");
+        let sliver = [
+            (
+                Vec4::new(-0.9, -0.8, 0.5, 1.0),
+                Vec4::new(1.0, 0.0, 0.0, 0.5),
+            ),
+            (
+                Vec4::new(0.9, -0.6, 0.5, 1.0),
+                Vec4::new(0.0, 1.0, 0.0, 0.5),
+            ),
+            (Vec4::new(0.1, 0.7, 0.5, 1.0), Vec4::new(1.0, 1.0, 0.0, 0.5)),
+        ];
+        let vertex = |&(p, c): &(Vec4, Vec4)| ClipVertex {
+            position: p,
+            varyings: c,
+        };
+        if greedy {
+            frame.draw_quads(&sliver, &[[0, 1, 2]], BLENDED, vertex, Greedy)
+        } else {
+            frame.draw(&sliver, &[[0, 1, 2]], BLENDED, vertex, |f| {
+                Some(*f.varyings())
+            })
+        }
+        .expect("sliver");
+        let stats = frame.finish();
+        (fb.to_rgba8(), stats)
+    };
+    let (greedy, greedy_stats) = draw(true);
+    let (per_fragment, stats) = draw(false);
+    assert!(stats.fragments_written > 20, "{stats:?}");
+    assert_eq!(greedy_stats, stats);
+    assert!(
+        greedy == per_fragment,
+        "a greedy quad shader changed pixels"
+    );
 }
 
 #[test]

@@ -122,8 +122,8 @@ const AUTO_FLUSH_TRIANGLES: usize = 1 << 20;
 /// [`MIN_SETUP_CHUNK`] triangles each...
 const SETUP_TASKS: usize = 8;
 const MIN_SETUP_CHUNK: usize = 1024;
-/// ...and fewer with many tiles: each task keeps a list per tile, and tasks × tiles stays under
-/// this (so small tiles on a large image cost no more list headers than one task did).
+/// ...and fewer with many tiles: each task keeps a list per tile, so tasks × tiles stays under
+/// this, or one task when the tiles alone exceed it (small tiles on a large image).
 const TASK_TILE_LISTS: usize = 1 << 16;
 
 /// One frame being drawn into a framebuffer.

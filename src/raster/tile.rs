@@ -1,5 +1,6 @@
 //! Tile rasterization: 2×2 quad traversal, perspective-correct interpolation, the depth test,
-//! the fragment stage (one [`QuadShader`] call per quad) and blending, for one triangle inside one tile.
+//! the fragment stage (one [`QuadShader`] call per quad) and blending, for one triangle inside
+//! one tile.
 //!
 //! Invariant: every pixel of a tile is written by exactly one thread, and a tile's triangles are
 //! processed strictly in submission order, so the result is independent of the thread count and
@@ -84,17 +85,6 @@ pub struct Quad<'q, V> {
 }
 
 impl<'q, V: Varyings> Quad<'q, V> {
-    /// Builds a quad by hand, for testing quad shaders without rasterizing.
-    pub fn new(x: u32, y: u32, depth: [f32; 4], varyings: &'q [V; 4]) -> Self {
-        Quad {
-            x,
-            y,
-            depth,
-            front_facing: true,
-            varyings,
-        }
-    }
-
     /// The interpolated varyings of every lane.
     #[inline]
     pub fn varyings(&self) -> &'q [V; 4] {
@@ -131,8 +121,9 @@ impl<'q, V: Varyings> Quad<'q, V> {
 /// lane alone.
 pub trait QuadShader<V>: Send + Sync {
     /// Shades the lanes whose bits are set in `lanes` (bit k = lane k is covered and passed the
-    /// depth test) and calls `write(k, colour)` at most once for each lane it keeps, only for
-    /// lanes in `lanes`; a lane not written is discarded.
+    /// depth test) and calls `write(k, colour)` for each lane it keeps; a lane not written is
+    /// discarded. The rasterizer ignores writes to lanes outside `lanes` and repeated writes to
+    /// a lane, so a faulty shader cannot reach a pixel the triangle does not cover.
     fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, write: impl FnMut(usize, Vec4));
 }
 
@@ -163,7 +154,7 @@ pub struct RasterStats {
     pub triangles: u64,
     /// Fragments that passed the depth test and ran the fragment stage.
     pub fragments_shaded: u64,
-    /// Fragments the closure did not discard, written to the framebuffer.
+    /// Fragments the fragment stage did not discard, written to the framebuffer.
     pub fragments_written: u64,
 }
 
@@ -341,11 +332,13 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 front_facing: tri.front_facing,
                 varyings: &quad,
             };
+            let mut open = passed;
             shader.shade_quad(&quad_view, passed, |lane, colour| {
-                debug_assert!(
-                    passed & (1 << lane) != 0,
-                    "a quad shader wrote lane {lane} outside its mask"
-                );
+                let bit = 1u32.checked_shl(lane as u32).unwrap_or(0);
+                if open & bit == 0 {
+                    return;
+                }
+                open &= !bit;
                 written += 1;
                 let index = quad_index + lane_offsets[lane];
                 let write_depth = match WRITE {

@@ -494,26 +494,13 @@ impl QuadShader<FurVaryings> for FurShader<'_> {
         lanes: u32,
         mut write: impl FnMut(usize, Vec4),
     ) {
+        let (textures, maps, layer, params) = (self.textures, self.maps, &self.layer, self.params);
         let colours = match self.stage {
-            FragmentStage::Quad => shade_fur_quad(
-                quad,
-                lanes,
-                self.textures,
-                self.maps,
-                &self.layer,
-                self.params,
-            ),
+            FragmentStage::Quad => shade_fur_quad(quad, lanes, textures, maps, layer, params),
             FragmentStage::ScalarTwin => std::array::from_fn(|lane| {
+                let fragment = quad.fragment(lane);
                 (lanes & (1 << lane) != 0)
-                    .then(|| {
-                        shade_fur(
-                            &quad.fragment(lane),
-                            self.textures,
-                            self.maps,
-                            &self.layer,
-                            self.params,
-                        )
-                    })
+                    .then(|| shade_fur(&fragment, textures, maps, layer, params))
                     .flatten()
             }),
         };
