@@ -6,6 +6,7 @@ use super::lanes::{LANES, Vec3x4};
 use super::numeric::{finite_or_zero, pow01, pow01_x4};
 use super::tangent_space::{cos_sin_unit, cos_sin_unit_x4};
 use glam::Vec3;
+use wide::f32x4;
 
 /// Banks's exponent on the Kajiya–Kay diffuse term, 4.8 (thesis 3.2.3: "the dampening is done
 /// by exponentiating the diffuse value by 4.8 as stated by Banks").
@@ -144,7 +145,8 @@ pub fn strand_lighting_x4(
     let (cos_tl, sin_tl) = cos_sin_unit_x4(&t, &l);
     let specular_base = |t: &Vec3x4, (cl, sl): ([f32; LANES], [f32; LANES])| {
         let (ce, se) = cos_sin_unit_x4(t, &e);
-        std::array::from_fn::<f32, LANES, _>(|i| cl[i] * ce[i] + sl[i] * se[i])
+        let [cl, sl, ce, se] = [cl, sl, ce, se].map(f32x4::new);
+        (cl * ce + sl * se).to_array()
     };
     let centre = specular_base(&t, (cos_tl, sin_tl));
     let diffuse = pow01_x4(sin_tl, [exponents.banks; LANES]);

@@ -1,5 +1,6 @@
-//! Four fragments at once (the lanes of a 2×2 quad), one array per vector component, so that
-//! the compiler turns each lane loop into packed instructions.
+//! Four fragments at once (the lanes of a 2×2 quad), one array per vector component; each
+//! operation runs on packed 4-lane registers (`wide::f32x4`: SSE on x86-64, NEON on AArch64,
+//! plain arrays elsewhere).
 //!
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the
@@ -8,6 +9,7 @@
 //! the bits against the twins on random, special and degenerate vectors.
 
 use glam::Vec3;
+use wide::f32x4;
 
 /// Lanes per batch: the four fragments of a quad.
 pub const LANES: usize = 4;
@@ -50,46 +52,54 @@ impl Vec3x4 {
         Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 
+    /// The components as packed registers.
+    #[inline(always)]
+    fn packed(&self) -> [f32x4; 3] {
+        [self.x, self.y, self.z].map(f32x4::new)
+    }
+
+    /// From packed components.
+    #[inline(always)]
+    fn from_packed([x, y, z]: [f32x4; 3]) -> Self {
+        Vec3x4 {
+            x: x.to_array(),
+            y: y.to_array(),
+            z: z.to_array(),
+        }
+    }
+
     /// `Vec3::dot`: `(x·x' + y·y') + z·z'`.
     #[inline(always)]
     pub fn dot(&self, o: &Self) -> [f32; LANES] {
-        std::array::from_fn(|i| (self.x[i] * o.x[i]) + (self.y[i] * o.y[i]) + (self.z[i] * o.z[i]))
+        dot_packed(self.packed(), o.packed()).to_array()
     }
 
     /// `self + s·o` per lane (`Vec3 + f32 * Vec3`).
     #[inline(always)]
     pub fn add_scaled(&self, s: [f32; LANES], o: &Self) -> Self {
-        Vec3x4 {
-            x: std::array::from_fn(|i| self.x[i] + s[i] * o.x[i]),
-            y: std::array::from_fn(|i| self.y[i] + s[i] * o.y[i]),
-            z: std::array::from_fn(|i| self.z[i] + s[i] * o.z[i]),
-        }
+        let s = f32x4::new(s);
+        let (a, b) = (self.packed(), o.packed());
+        Self::from_packed(std::array::from_fn(|c| a[c] + s * b[c]))
     }
 
     /// `self·s − 1` per component (`v * s - Vec3::ONE`).
     #[inline(always)]
     pub fn scale_minus_one(&self, s: f32) -> Self {
-        Vec3x4 {
-            x: self.x.map(|c| c * s - 1.0),
-            y: self.y.map(|c| c * s - 1.0),
-            z: self.z.map(|c| c * s - 1.0),
-        }
+        let s = f32x4::splat(s);
+        Self::from_packed(self.packed().map(|c| c * s - f32x4::ONE))
     }
 
     /// `Vec3::normalize_or`: `r = 1 / sqrt(v·v)`; `v·r` where `r` is finite and positive, else
     /// the fallback's lane.
     #[inline(always)]
     pub fn normalize_or(&self, fallback: &Self) -> Self {
-        let mut out = *fallback;
-        for (i, length_squared) in self.dot(self).into_iter().enumerate() {
-            let rcp = 1.0 / length_squared.sqrt();
-            if rcp.is_finite() && rcp > 0.0 {
-                out.x[i] = self.x[i] * rcp;
-                out.y[i] = self.y[i] * rcp;
-                out.z[i] = self.z[i] * rcp;
-            }
-        }
-        out
+        let v = self.packed();
+        let rcp = f32x4::ONE / dot_packed(v, v).sqrt();
+        let keep = rcp.is_finite() & rcp.simd_gt(f32x4::ZERO);
+        let fallback = fallback.packed();
+        Self::from_packed(std::array::from_fn(|c| {
+            keep.select(v[c] * rcp, fallback[c])
+        }))
     }
 
     /// `Vec3::normalize_or_zero`.
@@ -101,8 +111,21 @@ impl Vec3x4 {
     /// `v == Vec3::ZERO` per lane (−0 counts as zero, NaN does not).
     #[inline(always)]
     pub fn is_zero(&self) -> [bool; LANES] {
-        std::array::from_fn(|i| self.x[i] == 0.0 && self.y[i] == 0.0 && self.z[i] == 0.0)
+        self.zero_mask().to_array().map(|m| m.to_bits() != 0)
     }
+
+    /// [`Vec3x4::is_zero`] as a lane mask (all bits set where zero), for `select`.
+    #[inline(always)]
+    pub(crate) fn zero_mask(&self) -> f32x4 {
+        let [x, y, z] = self.packed();
+        x.simd_eq(f32x4::ZERO) & y.simd_eq(f32x4::ZERO) & z.simd_eq(f32x4::ZERO)
+    }
+}
+
+/// `Vec3::dot` of packed components: `(x·x' + y·y') + z·z'`.
+#[inline(always)]
+fn dot_packed([x, y, z]: [f32x4; 3], [x2, y2, z2]: [f32x4; 3]) -> f32x4 {
+    (x * x2 + y * y2) + z * z2
 }
 
 #[cfg(test)]

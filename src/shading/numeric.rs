@@ -297,6 +297,29 @@ mod tests {
         }
     }
 
+    /// Random bases over every bit pattern of [0, 1] and random exponents from 2^-12 to 2^14:
+    /// results from 1 down to the subnormals, so every split of `y·log2 x` into integer and
+    /// fraction (the variable shifts of the main path) is met.
+    #[test]
+    fn pow01_x4_matches_pow01_on_random_bases_and_exponents() {
+        let mut rng = crate::shading::test_support::Lcg::new(97);
+        for _ in 0..100_000 {
+            let base: [f32; 4] =
+                std::array::from_fn(|_| f32::from_bits((rng.next_u64() % 0x3f80_0001) as u32));
+            let exponent: [f32; 4] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
+            let got = pow01_x4(base, exponent);
+            for i in 0..4 {
+                assert_eq!(
+                    got[i].to_bits(),
+                    pow01(base[i], exponent[i]).to_bits(),
+                    "{}^{}",
+                    base[i],
+                    exponent[i]
+                );
+            }
+        }
+    }
+
     /// Every base in (0, 1] against libm for the exponents the scenes use. Minutes in release:
     /// `cargo test --release -- --ignored pow01_x4_exhaustive`.
     #[test]

@@ -5,6 +5,7 @@
 use super::lanes::{LANES, Vec3x4};
 use crate::mesh::frame::TangentFrame;
 use glam::Vec3;
+use wide::f32x4;
 
 /// Tangent-space coordinates `(v·T, v·B, v·N)` of a world vector (thesis 3.2.1: "we transform
 /// the eye and the light vector by multiplying them with the T, B, N matrix").
@@ -34,18 +35,19 @@ pub(crate) fn cos_sin_unit(a: Vec3, b: Vec3) -> (f32, f32) {
 /// [`cos_sin_unit`] on four lanes, lane by lane the same bits.
 #[inline(always)]
 pub(crate) fn cos_sin_unit_x4(a: &Vec3x4, b: &Vec3x4) -> ([f32; LANES], [f32; LANES]) {
-    let dot = a.dot(b);
-    let (a_zero, b_zero) = (a.is_zero(), b.is_zero());
-    let mut cos = [0.0; LANES];
-    let mut sin = [0.0; LANES];
-    for i in 0..LANES {
-        let c = dot[i].clamp(-1.0, 1.0);
-        let s = (1.0 - c * c).max(0.0).sqrt();
-        let zero = a_zero[i] || b_zero[i];
-        cos[i] = if zero { 0.0 } else { c };
-        sin[i] = if zero { 0.0 } else { s };
-    }
-    (cos, sin)
+    let dot = f32x4::new(a.dot(b));
+    // `f32::clamp`: NaN stays NaN.
+    let c = dot
+        .simd_lt(f32x4::splat(-1.0))
+        .select(f32x4::splat(-1.0), dot);
+    let c = c.simd_gt(f32x4::ONE).select(f32x4::ONE, c);
+    // `f32::max(x, 0)` is 0 for NaN `x`, and so is `wide`'s `max` with a non-NaN right side.
+    let s = (f32x4::ONE - c * c).max(f32x4::ZERO).sqrt();
+    let zero = a.zero_mask() | b.zero_mask();
+    (
+        zero.select(f32x4::ZERO, c).to_array(),
+        zero.select(f32x4::ZERO, s).to_array(),
+    )
 }
 
 /// Sine of the angle between `a` and `b`, in `[0, 1]`: both are normalised inside, then
