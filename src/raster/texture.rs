@@ -19,6 +19,7 @@
 
 use super::RasterError;
 use glam::{Vec2, Vec4};
+use wide::{f32x4, i32x4};
 
 /// One mip level: row-major RGBA8 texels, row 0 at v = 0.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -260,6 +261,30 @@ fn texel_coordinate(x: f32) -> f32 {
     }
 }
 
+/// [`texel_coordinate`] of four lanes.
+#[inline(always)]
+fn texel_coordinate_x4(x: f32x4) -> f32x4 {
+    let limit = f32x4::splat(COORDINATE_LIMIT);
+    let clamped = x.simd_lt(-limit).select(-limit, x);
+    let clamped = clamped.simd_gt(limit).select(limit, clamped);
+    x.is_finite().select(clamped, f32x4::ZERO)
+}
+
+/// [`floor_small`] of four lanes: truncated (exact within ±2^30), then one down where that
+/// rounded up.
+#[inline(always)]
+fn floor_x4(x: f32x4) -> i32x4 {
+    let truncated = x.fast_trunc_int();
+    let rounded_up: i32x4 = wide::bytemuck::cast(truncated.round_float().simd_gt(x));
+    truncated + rounded_up
+}
+
+/// `⌊texel_coordinate(x)⌋` of four lanes.
+#[inline(always)]
+fn floor_texel_x4(x: f32x4) -> i32x4 {
+    floor_x4(texel_coordinate_x4(x))
+}
+
 /// `⌊x⌋` for `|x| ≤ 2^30`, equal to `f32::floor` there. (`f32::floor` is a library call on
 /// x86-64 without SSE4.1; truncation plus a correction is not.)
 #[inline]
@@ -304,11 +329,14 @@ impl Sampler {
     #[inline]
     pub fn sample_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
         let (k, frac) = texture.level_and_fraction(lod);
-        let a = self.bilinear(&texture.levels[k], uv);
-        if frac == 0.0 || k + 1 >= texture.levels.len() {
+        let k1 = (k + 1).min(texture.levels.len() - 1);
+        let (lower, upper) = (&texture.levels[k], &texture.levels[k1]);
+        let [fa, fb] = self.bilinear_footprints([lower, upper], uv);
+        let a = fa.filter(lower);
+        if frac == 0.0 || k1 == k {
             return a;
         }
-        let b = self.bilinear(&texture.levels[k + 1], uv);
+        let b = fb.filter(upper);
         a + (b - a) * frac
     }
 
@@ -333,11 +361,13 @@ impl Sampler {
             );
         }
         let (k, frac) = first.level_and_fraction(lod);
-        let (a1, a2) = self.bilinear_pair(&first.levels[k], &second.levels[k], uv);
-        if frac == 0.0 || k + 1 >= first.levels.len() {
+        let k1 = (k + 1).min(first.levels.len() - 1);
+        let [fa, fb] = self.bilinear_footprints([&first.levels[k], &first.levels[k1]], uv);
+        let (a1, a2) = (fa.filter(&first.levels[k]), fa.filter(&second.levels[k]));
+        if frac == 0.0 || k1 == k {
             return (a1, a2);
         }
-        let (b1, b2) = self.bilinear_pair(&first.levels[k + 1], &second.levels[k + 1], uv);
+        let (b1, b2) = (fb.filter(&first.levels[k1]), fb.filter(&second.levels[k1]));
         (a1 + (b1 - a1) * frac, a2 + (b2 - a2) * frac)
     }
 
@@ -362,6 +392,39 @@ impl Sampler {
         UNORM8[usize::from(self.nearest_texel(level, uv)[3])]
     }
 
+    /// [`Sampler::alpha_nearest_in`] at four points, the same four values: the coordinates go
+    /// through the clamp, the floor and the addressing as packed lanes.
+    #[inline]
+    pub fn alpha_nearest_in_x4(&self, level: &MipLevel, points: [Vec2; 4]) -> [f32; 4] {
+        let (width, height) = (level.width, level.height);
+        let x = floor_texel_x4(f32x4::new(points.map(|p| p.x)) * f32x4::splat(width as f32));
+        let y = floor_texel_x4(f32x4::new(points.map(|p| p.y)) * f32x4::splat(height as f32));
+        let (x, y) = (
+            self.address_x4(x, [width; 4], [self.address_u; 4]),
+            self.address_x4(y, [height; 4], [self.address_v; 4]),
+        );
+        let (x, y) = (x.to_array(), y.to_array());
+        std::array::from_fn(|i| {
+            let texel = level.texels[y[i] as usize * width as usize + x[i] as usize];
+            UNORM8[usize::from(texel[3])]
+        })
+    }
+
+    /// [`address`] of four lanes, each with its own size and mode.
+    #[inline(always)]
+    fn address_x4(&self, index: i32x4, size: [u32; 4], modes: [AddressMode; 4]) -> i32x4 {
+        if modes.iter().all(|&m| m == AddressMode::Wrap) && size.iter().all(|n| n.is_power_of_two())
+        {
+            // Masking a two's-complement index is its Euclidean remainder by a power of two.
+            index & i32x4::new(size.map(|n| n as i32 - 1))
+        } else {
+            let index = index.to_array();
+            i32x4::new(std::array::from_fn(|lane| {
+                address(i64::from(index[lane]), size[lane], modes[lane]) as i32
+            }))
+        }
+    }
+
     #[inline]
     fn nearest(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
         to_vec4(self.nearest_texel(level, uv))
@@ -379,32 +442,41 @@ impl Sampler {
 
     #[inline]
     fn bilinear(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
-        self.bilinear_footprint(level, uv).filter(level)
+        self.bilinear_footprints([level, level], uv)[0].filter(level)
     }
 
+    /// The four texels and the weights of a bilinear sample of each of two levels (a
+    /// trilinear sample's pair): the x and y of both levels go through the coordinate clamp,
+    /// the floor and the addressing together, as four packed lanes.
     #[inline]
-    fn bilinear_pair(&self, first: &MipLevel, second: &MipLevel, uv: Vec2) -> (Vec4, Vec4) {
-        let footprint = self.bilinear_footprint(first, uv);
-        (footprint.filter(first), footprint.filter(second))
-    }
-
-    /// The four texels and the weights of a bilinear sample of a level of this size.
-    #[inline]
-    fn bilinear_footprint(&self, level: &MipLevel, uv: Vec2) -> BilinearFootprint {
-        let x = texel_coordinate(uv.x * level.width as f32 - 0.5);
-        let y = texel_coordinate(uv.y * level.height as f32 - 0.5);
-        let (xi, yi) = (floor_small(x), floor_small(y));
-        let (fx, fy) = (x - xi as f32, y - yi as f32);
-        let xa = address(xi, level.width, self.address_u) as usize;
-        let xb = address(xi.saturating_add(1), level.width, self.address_u) as usize;
-        let ya = address(yi, level.height, self.address_v) as usize;
-        let yb = address(yi.saturating_add(1), level.height, self.address_v) as usize;
-        let w = level.width as usize;
-        BilinearFootprint {
-            texels: [ya * w + xa, ya * w + xb, yb * w + xa, yb * w + xb],
-            fx,
-            fy,
-        }
+    fn bilinear_footprints(&self, levels: [&MipLevel; 2], uv: Vec2) -> [BilinearFootprint; 2] {
+        let [a, b] = levels;
+        let size = [a.width, a.height, b.width, b.height];
+        let position = f32x4::new([uv.x, uv.y, uv.x, uv.y]) * f32x4::new(size.map(|n| n as f32))
+            - f32x4::splat(0.5);
+        let position = texel_coordinate_x4(position);
+        let floor = floor_x4(position);
+        let fraction = (position - floor.round_float()).to_array();
+        let modes = [
+            self.address_u,
+            self.address_v,
+            self.address_u,
+            self.address_v,
+        ];
+        let low = self.address_x4(floor, size, modes);
+        let high = self.address_x4(floor + i32x4::ONE, size, modes);
+        let (low, high) = (low.to_array(), high.to_array());
+        std::array::from_fn(|level| {
+            let (x, y) = (2 * level, 2 * level + 1);
+            let row = size[x] as usize;
+            let (xa, xb) = (low[x] as usize, high[x] as usize);
+            let (ya, yb) = (low[y] as usize, high[y] as usize);
+            BilinearFootprint {
+                texels: [ya * row + xa, ya * row + xb, yb * row + xa, yb * row + xb],
+                fx: fraction[x],
+                fy: fraction[y],
+            }
+        })
     }
 }
 
@@ -533,6 +605,86 @@ mod tests {
         let (pa, pb) = s.sample_level_pair(&a, &small, Vec2::splat(0.3), 0.7);
         assert_eq!(pa, s.sample_level(&a, Vec2::splat(0.3), 0.7));
         assert_eq!(pb, s.sample_level(&small, Vec2::splat(0.3), 0.7));
+    }
+
+    /// The footprint as first written, one axis at a time in i64: the reference the packed
+    /// [`Sampler::bilinear_footprints`] must equal.
+    fn scalar_footprint(s: &Sampler, level: &MipLevel, uv: Vec2) -> ([usize; 4], f32, f32) {
+        let x = texel_coordinate(uv.x * level.width as f32 - 0.5);
+        let y = texel_coordinate(uv.y * level.height as f32 - 0.5);
+        let (xi, yi) = (floor_small(x), floor_small(y));
+        let xa = address(xi, level.width, s.address_u) as usize;
+        let xb = address(xi.saturating_add(1), level.width, s.address_u) as usize;
+        let ya = address(yi, level.height, s.address_v) as usize;
+        let yb = address(yi.saturating_add(1), level.height, s.address_v) as usize;
+        let w = level.width as usize;
+        (
+            [ya * w + xa, ya * w + xb, yb * w + xa, yb * w + xb],
+            x - xi as f32,
+            y - yi as f32,
+        )
+    }
+
+    /// Coordinates from far outside the texture to texel edges, with NaN and infinities.
+    fn awkward_coordinates(k: u32) -> Vec2 {
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            0.5 / 16.0,
+            -1e-9,
+            1e9,
+            -1e9,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            3.0e38,
+        ];
+        let wave = |k: u32, scale: f32| ((k as f32 * 0.618_034).fract() - 0.5) * scale;
+        let pick = |k: u32, scale: f32| {
+            if k.is_multiple_of(7) {
+                special[(k / 7) as usize % special.len()]
+            } else {
+                wave(k, scale)
+            }
+        };
+        Vec2::new(pick(k, 9.0), pick(k.wrapping_mul(31) + 3, 5.0))
+    }
+
+    #[test]
+    fn packed_addressing_equals_the_scalar_rules() {
+        let textures = [
+            checker(16),
+            Texture::from_rgba8(12, 5, (0..60u8).map(|i| [i, i, i, i * 4]).collect())
+                .expect("texture"),
+        ];
+        let modes = [AddressMode::Wrap, AddressMode::Clamp];
+        for texture in &textures {
+            for (address_u, address_v) in modes.iter().flat_map(|&u| modes.map(|v| (u, v))) {
+                let s = Sampler {
+                    address_u,
+                    address_v,
+                    filter: Filter::Trilinear,
+                };
+                for k in 0..4000u32 {
+                    let uv = awkward_coordinates(k);
+                    let a = &texture.levels[k as usize % texture.levels.len()];
+                    let b = &texture.levels[(k as usize + 1) % texture.levels.len()];
+                    let packed = s.bilinear_footprints([a, b], uv);
+                    for (footprint, level) in packed.iter().zip([a, b]) {
+                        let (texels, fx, fy) = scalar_footprint(&s, level, uv);
+                        assert_eq!(footprint.texels, texels, "{uv} {address_u:?} {address_v:?}");
+                        assert_eq!(footprint.fx.to_bits(), fx.to_bits(), "{uv}");
+                        assert_eq!(footprint.fy.to_bits(), fy.to_bits(), "{uv}");
+                    }
+                    let points = std::array::from_fn(|i| awkward_coordinates(k * 4 + i as u32));
+                    let alphas = s.alpha_nearest_in_x4(a, points);
+                    for (alpha, point) in alphas.iter().zip(points) {
+                        assert_eq!(alpha.to_bits(), s.alpha_nearest_in(a, point).to_bits());
+                    }
+                }
+            }
+        }
     }
 
     #[test]

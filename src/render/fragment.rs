@@ -691,8 +691,8 @@ fn surface(
         }
         _ => {
             let level = colour_map.nearest_level(lod);
-            shading::shell_shadow(
-                |at| sampler.alpha_nearest_in(level, at),
+            shading::shell_shadow_x4(
+                |points| sampler.alpha_nearest_in_x4(level, points),
                 uv,
                 offset,
                 layer.lookups,

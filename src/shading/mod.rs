@@ -105,7 +105,9 @@ pub use motion::{
     gravity_lean, lean_displacement, path_position, spring_impulse_response, spring_lag,
 };
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
-pub use shadow::{SHADOW_MIN_COS, shadow_change, shadow_lookup_count, shell_shadow};
+pub use shadow::{
+    SHADOW_MIN_COS, shadow_change, shadow_lookup_count, shell_shadow, shell_shadow_x4,
+};
 pub use spots::{
     apply_spot, apply_spots, ellipsoid_spot_intensity, light_spot_cosine, light_spot_cosine_below,
     light_spot_intensity, light_spot_lobe, spot_gradient, stripe_intensity,

@@ -45,6 +45,38 @@ pub fn shell_shadow(
     shadow
 }
 
+/// [`shell_shadow`] with the lookups sampled four at a time (`sample_alpha_x4` gets four
+/// points and returns their alphas): the same points, and the same sum in the same order, so
+/// the same bits. Lanes past the last lookup repeat it and are not added.
+#[inline]
+pub fn shell_shadow_x4(
+    mut sample_alpha_x4: impl FnMut([Vec2; 4]) -> [f32; 4],
+    uv: Vec2,
+    shadow_lookup: Vec2,
+    lookups: u32,
+) -> f32 {
+    let finite = |v: Vec2| Vec2::new(finite_or_zero(v.x), finite_or_zero(v.y));
+    let (uv, step) = (finite(uv), finite(shadow_lookup));
+    let m = lookups as f32;
+    let mut shadow = 0.0;
+    let mut first = 1;
+    while first <= lookups {
+        let point = |lane: u32| {
+            let k = (first + lane).min(lookups);
+            uv + step * (k as f32 / m)
+        };
+        let alphas = sample_alpha_x4([point(0), point(1), point(2), point(3)]);
+        for alpha in alphas
+            .into_iter()
+            .take((lookups - first + 1).min(4) as usize)
+        {
+            shadow += saturate(alpha);
+        }
+        first += 4;
+    }
+    shadow
+}
+
 /// Light directions closer to the surface than this cosine are treated as this cosine by
 /// [`shadow_change`] (about 75.5° from the normal).
 pub const SHADOW_MIN_COS: f32 = 0.25;
@@ -107,6 +139,44 @@ mod tests {
         }
         // Last sample lands exactly on uv + shadow_lookup.
         assert_eq!(seen[2], Vec2::new(0.25, 0.5) + Vec2::new(0.3, -0.6));
+    }
+
+    #[test]
+    fn four_at_a_time_is_the_same_sum_bit_for_bit() {
+        let mut rng = Lcg::new(5);
+        // A deterministic, position-dependent alpha with NaN and out-of-range values mixed in.
+        let alpha = |p: Vec2| {
+            let a = (p.x * 12.9898 + p.y * 78.233).sin() * 1.7;
+            if a > 1.5 { f32::NAN } else { a }
+        };
+        for k in 0..3000 {
+            let uv = Vec2::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
+            let offset = Vec2::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
+            let lookups = k % 14;
+            let mut seen = Vec::new();
+            let batched = shell_shadow_x4(
+                |points| {
+                    seen.extend(points);
+                    points.map(alpha)
+                },
+                uv,
+                offset,
+                lookups,
+            );
+            assert_eq!(
+                batched.to_bits(),
+                shell_shadow(alpha, uv, offset, lookups).to_bits(),
+                "{uv} {offset} {lookups}"
+            );
+            assert_eq!(seen.len(), lookups.div_ceil(4) as usize * 4);
+        }
+        for bad in [f32::NAN, f32::INFINITY] {
+            let uv = Vec2::new(bad, 0.5);
+            assert_eq!(
+                shell_shadow_x4(|p| p.map(alpha), uv, Vec2::X, 5).to_bits(),
+                shell_shadow(alpha, uv, Vec2::X, 5).to_bits()
+            );
+        }
     }
 
     #[test]
