@@ -49,13 +49,53 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     })
 }
 
+/// [`pow01_x4`] of one base with two exponents, `(base^a, base^b)` lane by lane, the same
+/// bits as two calls: the two powers share the logarithm half of the main path.
+#[inline]
+pub(crate) fn pow01_x4_two_exponents(
+    base: [f32; 4],
+    a: [f32; 4],
+    b: [f32; 4],
+) -> ([f32; 4], [f32; 4]) {
+    let x = base.map(saturate);
+    let log2_x = log2_parts_x4(x);
+    let power = |exponent: [f32; 4]| {
+        let y = exponent.map(sanitize_exponent);
+        let (z, main_path) = exp2_of_product_x4(&log2_x, y);
+        std::array::from_fn(|i| {
+            if main_path[i] {
+                z[i]
+            } else {
+                libm::powf(x[i], y[i])
+            }
+        })
+    };
+    (power(a), power(b))
+}
+
+/// `log2 x` of the main path of FreeBSD's `e_powf.c` (as ported by `libm`) for `0 < x < 1`
+/// normal, carried in two parts `t1 + t2`, and per lane whether `x` is on that path. The
+/// first half of [`powf_main_path_x4`], shared by powers of one base.
+#[derive(Clone, Copy)]
+struct Log2Parts {
+    t1: [f32; 4],
+    t2: [f32; 4],
+    x_on_path: [bool; 4],
+}
+
 /// The main path of FreeBSD's `e_powf.c` (as ported by `libm`) for `0 < x < 1` normal and
 /// finite `y > 0`: `x^y = 2^(y·log2 x)` with `log2 x` and the product carried in two parts.
 /// Returns the four results and, per lane, whether the lane is on that path (when not, its
 /// result is meaningless). Integer shifts wrap so off-path lanes cannot overflow.
 #[inline(always)]
-#[allow(clippy::excessive_precision)]
 fn powf_main_path_x4(x: [f32; 4], y: [f32; 4]) -> ([f32; 4], [bool; 4]) {
+    exp2_of_product_x4(&log2_parts_x4(x), y)
+}
+
+/// The `log2 x` half of [`powf_main_path_x4`].
+#[inline(always)]
+#[allow(clippy::excessive_precision)]
+fn log2_parts_x4(x: [f32; 4]) -> Log2Parts {
     const BP: [f32; 2] = [1.0, 1.5];
     const DP_H: [f32; 2] = [0.0, 5.84960938e-01];
     const DP_L: [f32; 2] = [0.0, 1.56322085e-06];
@@ -65,31 +105,20 @@ fn powf_main_path_x4(x: [f32; 4], y: [f32; 4]) -> ([f32; 4], [bool; 4]) {
     const L4: f32 = 2.7272811532e-01;
     const L5: f32 = 2.3066075146e-01;
     const L6: f32 = 2.0697501302e-01;
-    const P1: f32 = 1.6666667163e-01;
-    const P2: f32 = -2.7777778450e-03;
-    const P3: f32 = 6.6137559770e-05;
-    const P4: f32 = -1.6533901999e-06;
-    const P5: f32 = 4.1381369442e-08;
-    const LG2: f32 = 6.9314718246e-01;
-    const LG2_H: f32 = 6.93145752e-01;
-    const LG2_L: f32 = 1.42860654e-06;
     const CP: f32 = 9.6179670095e-01;
     const CP_H: f32 = 9.6191406250e-01;
     const CP_L: f32 = -1.1736857402e-04;
     let trunc = |v: f32, mask: u32| f32::from_bits(v.to_bits() & mask);
-    let mut out = [0.0f32; 4];
-    let mut ok = [false; 4];
+    let mut parts = Log2Parts {
+        t1: [0.0; 4],
+        t2: [0.0; 4],
+        x_on_path: [false; 4],
+    };
     for lane in 0..4 {
-        let (x, y) = (x[lane], y[lane]);
+        let x = x[lane];
         let hx = x.to_bits() as i32;
-        let hy = y.to_bits() as i32;
-        // On the path: x normal in (0, 1); y positive finite, at most 2^27, not ½, 1 or 2.
-        let on_path = (0x0080_0000..0x3f80_0000).contains(&hx)
-            && hy > 0
-            && hy <= 0x4d00_0000
-            && hy != 0x3f80_0000
-            && hy != 0x4000_0000
-            && hy != 0x3f00_0000;
+        // On the path: x normal in (0, 1).
+        parts.x_on_path[lane] = (0x0080_0000..0x3f80_0000).contains(&hx);
         // log2(x) = n + dp_h[k] + z_h + z_l, with x reduced to [sqrt(1/2), sqrt(2)·...).
         let mut n = (hx >> 23) - 0x7f;
         let j = hx & 0x007f_ffff;
@@ -124,6 +153,38 @@ fn powf_main_path_x4(x: [f32; 4], y: [f32; 4]) -> ([f32; 4], [bool; 4]) {
         let t = n as f32;
         let t1 = trunc(((z_h + z_l) + DP_H[k]) + t, 0xffff_f000);
         let t2 = z_l - (((t1 - t) - DP_H[k]) - z_h);
+        parts.t1[lane] = t1;
+        parts.t2[lane] = t2;
+    }
+    parts
+}
+
+/// The `2^(y·log2 x)` half of [`powf_main_path_x4`]: the results and, per lane, whether `x`
+/// and `y` are on the main path (`y` positive finite, at most 2^27, not ½, 1 or 2) and the
+/// result neither underflows nor is subnormal.
+#[inline(always)]
+#[allow(clippy::excessive_precision)]
+fn exp2_of_product_x4(log2_x: &Log2Parts, y: [f32; 4]) -> ([f32; 4], [bool; 4]) {
+    const P1: f32 = 1.6666667163e-01;
+    const P2: f32 = -2.7777778450e-03;
+    const P3: f32 = 6.6137559770e-05;
+    const P4: f32 = -1.6533901999e-06;
+    const P5: f32 = 4.1381369442e-08;
+    const LG2: f32 = 6.9314718246e-01;
+    const LG2_H: f32 = 6.93145752e-01;
+    const LG2_L: f32 = 1.42860654e-06;
+    let trunc = |v: f32, mask: u32| f32::from_bits(v.to_bits() & mask);
+    let mut out = [0.0f32; 4];
+    let mut ok = [false; 4];
+    for lane in 0..4 {
+        let (t1, t2, y) = (log2_x.t1[lane], log2_x.t2[lane], y[lane]);
+        let hy = y.to_bits() as i32;
+        let on_path = log2_x.x_on_path[lane]
+            && hy > 0
+            && hy <= 0x4d00_0000
+            && hy != 0x3f80_0000
+            && hy != 0x4000_0000
+            && hy != 0x3f00_0000;
         // y·log2(x) as p_h + p_l.
         let y1 = trunc(y, 0xffff_f000);
         let p_l = (y - y1) * t1 + y * t2;
@@ -307,14 +368,31 @@ mod tests {
             let base: [f32; 4] =
                 std::array::from_fn(|_| f32::from_bits((rng.next_u64() % 0x3f80_0001) as u32));
             let exponent: [f32; 4] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
+            let other: [f32; 4] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
             let got = pow01_x4(base, exponent);
+            let (first, second) = pow01_x4_two_exponents(base, exponent, other);
             for i in 0..4 {
+                let want = pow01(base[i], exponent[i]);
                 assert_eq!(
                     got[i].to_bits(),
-                    pow01(base[i], exponent[i]).to_bits(),
+                    want.to_bits(),
                     "{}^{}",
                     base[i],
                     exponent[i]
+                );
+                assert_eq!(
+                    first[i].to_bits(),
+                    want.to_bits(),
+                    "{}^{}",
+                    base[i],
+                    exponent[i]
+                );
+                assert_eq!(
+                    second[i].to_bits(),
+                    pow01(base[i], other[i]).to_bits(),
+                    "{}^{}",
+                    base[i],
+                    other[i]
                 );
             }
         }
