@@ -5,7 +5,9 @@
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the
 //! same bits as the scalar code. No fused multiply-adds, no reassociation, no approximate
-//! reciprocals: Rust never contracts or reorders float operations on its own. The tests check
+//! reciprocals: Rust never contracts or reorders float operations on its own, and only `wide`'s
+//! correctly rounded operations are used (`+ − × ÷`, `sqrt`, comparisons and `select`; never
+//! its `recip`, `recip_sqrt` or `mul_add`). The tests check
 //! the bits against the twins on random, special and degenerate vectors.
 
 use glam::Vec3;
