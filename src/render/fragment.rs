@@ -104,6 +104,9 @@ pub enum Spot {
         outer_threshold: f32,
         /// Cosines below this give weight 0 for certain (the lobe is not taken there).
         outside_below: f32,
+        /// `direction` normalised once more, as [`shading::light_spot_cosine`] normalises it, so
+        /// that a fragment's cosine is the dot product with its unit normal.
+        cosine_direction: Vec3,
         /// Colour.
         colour: Vec3,
     },
@@ -126,6 +129,13 @@ impl Spot {
     /// `(colour, weight)` of this spot at an object-space point with normal `normal`.
     #[inline]
     pub fn weight_at(&self, object: Vec3, normal: Vec3) -> (Vec3, f32) {
+        self.weight_at_unit_normal(object, normal.normalize_or_zero())
+    }
+
+    /// [`Spot::weight_at`] with the normal already normalised (`normal.normalize_or_zero()`),
+    /// as a fragment with several spots and matches computes it once.
+    #[inline]
+    pub fn weight_at_unit_normal(&self, object: Vec3, unit_normal: Vec3) -> (Vec3, f32) {
         match *self {
             Spot::Ellipsoid {
                 centre,
@@ -137,14 +147,16 @@ impl Spot {
                 shading::ellipsoid_spot_intensity(object, centre, radii, inner),
             ),
             Spot::Light {
-                direction,
                 exponent,
                 inner_threshold,
                 outer_threshold,
                 outside_below,
+                cosine_direction,
                 colour,
+                ..
             } => {
-                let cosine = shading::light_spot_cosine(normal, direction);
+                // `shading::light_spot_cosine(normal, direction)`, both normalisations done.
+                let cosine = unit_normal.dot(cosine_direction);
                 if cosine < outside_below {
                     return (colour, 0.0);
                 }
@@ -173,6 +185,9 @@ impl Spot {
 pub struct BurnState {
     /// Unit directions of the matches, object space.
     pub matches: Vec<Vec3>,
+    /// `matches` normalised once more, as [`shading::light_spot_cosine`] normalises them, so
+    /// that a fragment's cosine is the dot product with its unit normal.
+    pub cosine_matches: Vec<Vec3>,
     /// The lobe exponent at this instant.
     pub exponent: f32,
     /// Cosines below this give intensities under the burn threshold for certain.
@@ -207,10 +222,17 @@ impl BurnState {
     /// surely under the burn threshold count as 0: the burn rule treats both alike.
     #[inline]
     pub fn intensity(&self, normal: Vec3) -> f32 {
-        self.matches
+        self.intensity_at_unit_normal(normal.normalize_or_zero())
+    }
+
+    /// [`BurnState::intensity`] with the normal already normalised (`normal.normalize_or_zero()`).
+    #[inline]
+    pub fn intensity_at_unit_normal(&self, unit_normal: Vec3) -> f32 {
+        self.cosine_matches
             .iter()
             .map(|&m| {
-                let cosine = shading::light_spot_cosine(normal, m);
+                // `shading::light_spot_cosine(normal, m)`, both normalisations done.
+                let cosine = unit_normal.dot(m);
                 if cosine < self.unburnt_below {
                     0.0
                 } else {
@@ -280,6 +302,7 @@ impl ShadeParams {
                 },
                 SpotKind::Light => Spot::Light {
                     direction: spot.direction.normalize_or_zero(),
+                    cosine_direction: spot.direction.normalize_or_zero().normalize_or_zero(),
                     exponent: spot.exponent,
                     inner_threshold: spot.inner_threshold,
                     outer_threshold: spot.outer_threshold,
@@ -305,10 +328,17 @@ impl ShadeParams {
                 low_exponent: b.low_exponent,
                 spread_duration: b.spread_duration,
             };
-            shading::burn_exponent(time, &schedule).map(|exponent| BurnState {
-                matches: b.matches.iter().map(|m| m.normalize_or_zero()).collect(),
-                exponent,
-                unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
+            shading::burn_exponent(time, &schedule).map(|exponent| {
+                let matches: Vec<Vec3> = b.matches.iter().map(|m| m.normalize_or_zero()).collect();
+                BurnState {
+                    cosine_matches: matches.iter().map(|m| m.normalize_or_zero()).collect(),
+                    matches,
+                    exponent,
+                    unburnt_below: shading::light_spot_cosine_below(
+                        shading::BURN_THRESHOLD,
+                        exponent,
+                    ),
+                }
             })
         });
         ShadeParams {
@@ -343,8 +373,22 @@ impl ShadeParams {
     /// The burn outcome for a layer at this normal (Unburnt when nothing burns).
     #[inline]
     pub fn burn_outcome(&self, normal: Vec3, layer: &LayerParams) -> BurnOutcome {
+        self.burn_outcome_at_unit_normal(normal.normalize_or_zero(), layer)
+    }
+
+    /// [`ShadeParams::burn_outcome`] with the normal already normalised.
+    #[inline]
+    pub fn burn_outcome_at_unit_normal(
+        &self,
+        unit_normal: Vec3,
+        layer: &LayerParams,
+    ) -> BurnOutcome {
         match &self.burn {
-            Some(b) => shading::burn_rule(b.intensity(normal), layer.index, layer.max_shell),
+            Some(b) => shading::burn_rule(
+                b.intensity_at_unit_normal(unit_normal),
+                layer.index,
+                layer.max_shell,
+            ),
             None => BurnOutcome::Unburnt,
         }
     }
@@ -627,7 +671,9 @@ fn surface(
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Surface {
-    let burn = p.burn_outcome(v.normal, layer);
+    // The burn lobes and the light spots each need the unit normal: normalised once.
+    let unit_normal = v.normal.normalize_or_zero();
+    let burn = p.burn_outcome_at_unit_normal(unit_normal, layer);
     if burn == BurnOutcome::Burnt {
         return Surface::Discarded;
     }
@@ -671,7 +717,7 @@ fn surface(
         strand = shading::tint_strand(strand, maps.sample(tint, v.mesh_uv).truncate());
     }
     for spot in &p.spots {
-        let (colour, weight) = spot.weight_at(v.object, v.normal);
+        let (colour, weight) = spot.weight_at_unit_normal(v.object, unit_normal);
         strand = shading::apply_spot(strand, colour, weight);
     }
     let strand = burn.strand_colour(strand);
@@ -713,4 +759,66 @@ fn surface(
         light: v.light,
         eye: v.eye,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::test_support::Lcg;
+
+    /// Normals of every kind: random, tiny, huge, zero, NaN.
+    fn normals(rng: &mut Lcg) -> Vec<Vec3> {
+        let mut v: Vec<Vec3> = (0..2000).map(|_| rng.cube() * rng.range(0.1, 3.0)).collect();
+        v.extend([
+            Vec3::ZERO,
+            Vec3::splat(1e-30),
+            Vec3::splat(3e38),
+            Vec3::splat(f32::NAN),
+            Vec3::Y,
+        ]);
+        v
+    }
+
+    #[test]
+    fn spots_and_burn_with_the_unit_normal_equal_the_plain_formulas() {
+        let mut rng = Lcg::new(23);
+        let direction = Vec3::new(0.3, 0.8, -0.5).normalize_or_zero();
+        let spot = Spot::Light {
+            direction,
+            exponent: 20.0,
+            inner_threshold: 0.6,
+            outer_threshold: 0.3,
+            outside_below: shading::light_spot_cosine_below(0.3, 20.0),
+            cosine_direction: direction.normalize_or_zero(),
+            colour: Vec3::ONE,
+        };
+        let matches: Vec<Vec3> = (0..6).map(|_| rng.cube().normalize_or_zero()).collect();
+        let burn = BurnState {
+            cosine_matches: matches.iter().map(|m| m.normalize_or_zero()).collect(),
+            matches: matches.clone(),
+            exponent: 7.5,
+            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 7.5),
+        };
+        for normal in normals(&mut rng) {
+            // The plain statement: light_spot_cosine normalises both vectors itself.
+            let cosine = shading::light_spot_cosine(normal, direction);
+            let lobe = shading::light_spot_lobe(cosine, 20.0);
+            let weight = shading::spot_gradient(lobe, 0.6, 0.3);
+            let got = spot.weight_at_unit_normal(Vec3::ZERO, normal.normalize_or_zero());
+            assert_eq!(got.1.to_bits(), weight.to_bits(), "{normal}");
+            assert_eq!(spot.weight_at(Vec3::ZERO, normal).1.to_bits(), weight.to_bits());
+            let intensity = matches
+                .iter()
+                .map(|&m| shading::light_spot_lobe(shading::light_spot_cosine(normal, m), 7.5))
+                .fold(0.0f32, f32::max);
+            let got = burn.intensity_at_unit_normal(normal.normalize_or_zero());
+            // Lobes surely under the threshold count as 0, so they agree where it matters.
+            let burnt = |i: f32| i >= shading::BURN_THRESHOLD;
+            assert_eq!(burnt(got), burnt(intensity), "{normal}");
+            if burnt(intensity) {
+                assert_eq!(got.to_bits(), intensity.to_bits(), "{normal}");
+            }
+            assert_eq!(burn.intensity(normal).to_bits(), got.to_bits());
+        }
+    }
 }

@@ -69,7 +69,7 @@
 pub mod burn;
 mod numeric;
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 
 pub mod kajiya_kay;
 pub mod lanes;
