@@ -768,7 +768,9 @@ mod tests {
 
     /// Normals of every kind: random, tiny, huge, zero, NaN.
     fn normals(rng: &mut Lcg) -> Vec<Vec3> {
-        let mut v: Vec<Vec3> = (0..2000).map(|_| rng.cube() * rng.range(0.1, 3.0)).collect();
+        let mut v: Vec<Vec3> = (0..2000)
+            .map(|_| rng.cube() * rng.range(0.1, 3.0))
+            .collect();
         v.extend([
             Vec3::ZERO,
             Vec3::splat(1e-30),
@@ -806,7 +808,10 @@ mod tests {
             let weight = shading::spot_gradient(lobe, 0.6, 0.3);
             let got = spot.weight_at_unit_normal(Vec3::ZERO, normal.normalize_or_zero());
             assert_eq!(got.1.to_bits(), weight.to_bits(), "{normal}");
-            assert_eq!(spot.weight_at(Vec3::ZERO, normal).1.to_bits(), weight.to_bits());
+            assert_eq!(
+                spot.weight_at(Vec3::ZERO, normal).1.to_bits(),
+                weight.to_bits()
+            );
             let intensity = matches
                 .iter()
                 .map(|&m| shading::light_spot_lobe(shading::light_spot_cosine(normal, m), 7.5))
