@@ -30,23 +30,16 @@ pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
 /// Four [`pow01`]s at once, each lane bit-identical to `pow01(base[i], exponent[i])`.
 ///
 /// Why it exists: `libm::powf` was the costliest operation of the fur shader (three or more
-/// per fragment, 40 % of a frame; the batched powers are about 15 % now). This evaluates the main path of the same FreeBSD `e_powf.c`
-/// algorithm that `libm::powf` implements — the same IEEE operations in the same order, so the
-/// same bits — on four lanes without branches, which the compiler turns into SIMD. Lanes
-/// outside that path (base 0, 1 or subnormal, exponents 0, ½, 1, 2, infinite or above 2^27,
-/// results that underflow or are subnormal) are recomputed with `libm::powf` itself.
+/// per fragment, 40 % of a frame; the batched powers are about 15 % now). This evaluates the
+/// main path of the same FreeBSD `e_powf.c` algorithm that `libm::powf` implements — the same
+/// IEEE operations in the same order, so the same bits — on four lanes, in loops the compiler
+/// turns into SIMD. Lanes outside that path (base 0, 1 or subnormal, exponents 0, ½, 1, 2,
+/// infinite or above 2^27, results that underflow or are subnormal) are recomputed with
+/// `libm::powf` itself.
 #[inline]
 pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     let x = base.map(saturate);
-    let y = exponent.map(sanitize_exponent);
-    let (z, main_path) = powf_main_path_x4(x, y);
-    std::array::from_fn(|i| {
-        if main_path[i] {
-            z[i]
-        } else {
-            libm::powf(x[i], y[i])
-        }
-    })
+    pow01_x4_from_log2(x, &log2_parts_x4(x), exponent)
 }
 
 /// [`pow01_x4`] of one base with two exponents, `(base^a, base^b)` lane by lane, the same
@@ -59,23 +52,34 @@ pub(crate) fn pow01_x4_two_exponents(
 ) -> ([f32; 4], [f32; 4]) {
     let x = base.map(saturate);
     let log2_x = log2_parts_x4(x);
-    let power = |exponent: [f32; 4]| {
-        let y = exponent.map(sanitize_exponent);
-        let (z, main_path) = exp2_of_product_x4(&log2_x, y);
-        std::array::from_fn(|i| {
-            if main_path[i] {
-                z[i]
-            } else {
-                libm::powf(x[i], y[i])
-            }
-        })
-    };
-    (power(a), power(b))
+    (
+        pow01_x4_from_log2(x, &log2_x, a),
+        pow01_x4_from_log2(x, &log2_x, b),
+    )
+}
+
+/// `x^exponent` for saturated bases `x` whose logarithm half is `log2_x`: the main path's
+/// exp2 half, and `libm::powf` on the lanes off that path.
+#[inline(always)]
+fn pow01_x4_from_log2(x: [f32; 4], log2_x: &Log2Parts, exponent: [f32; 4]) -> [f32; 4] {
+    let y = exponent.map(sanitize_exponent);
+    let (z, main_path) = exp2_of_product_x4(log2_x, y);
+    std::array::from_fn(|i| {
+        if main_path[i] {
+            z[i]
+        } else {
+            libm::powf(x[i], y[i])
+        }
+    })
 }
 
 /// `log2 x` of the main path of FreeBSD's `e_powf.c` (as ported by `libm`) for `0 < x < 1`
-/// normal, carried in two parts `t1 + t2`, and per lane whether `x` is on that path. The
-/// first half of [`powf_main_path_x4`], shared by powers of one base.
+/// normal, carried in two parts `t1 + t2`, and per lane whether `x` is on that path: the
+/// first half of the main path, shared by powers of one base.
+///
+/// The main path: for `0 < x < 1` normal and finite `y > 0`, `x^y = 2^(y·log2 x)` with
+/// `log2 x` and the product carried in two parts. Integer shifts wrap so off-path lanes
+/// cannot overflow; their results are meaningless and replaced.
 #[derive(Clone, Copy)]
 struct Log2Parts {
     t1: [f32; 4],
@@ -83,16 +87,7 @@ struct Log2Parts {
     x_on_path: [bool; 4],
 }
 
-/// The main path of FreeBSD's `e_powf.c` (as ported by `libm`) for `0 < x < 1` normal and
-/// finite `y > 0`: `x^y = 2^(y·log2 x)` with `log2 x` and the product carried in two parts.
-/// Returns the four results and, per lane, whether the lane is on that path (when not, its
-/// result is meaningless). Integer shifts wrap so off-path lanes cannot overflow.
-#[inline(always)]
-fn powf_main_path_x4(x: [f32; 4], y: [f32; 4]) -> ([f32; 4], [bool; 4]) {
-    exp2_of_product_x4(&log2_parts_x4(x), y)
-}
-
-/// The `log2 x` half of [`powf_main_path_x4`].
+/// The `log2 x` half of the main path.
 #[inline(always)]
 #[allow(clippy::excessive_precision)]
 fn log2_parts_x4(x: [f32; 4]) -> Log2Parts {
@@ -159,7 +154,7 @@ fn log2_parts_x4(x: [f32; 4]) -> Log2Parts {
     parts
 }
 
-/// The `2^(y·log2 x)` half of [`powf_main_path_x4`]: the results and, per lane, whether `x`
+/// The `2^(y·log2 x)` half of the main path: the results and, per lane, whether `x`
 /// and `y` are on the main path (`y` positive finite, at most 2^27, not ½, 1 or 2) and the
 /// result neither underflows nor is subnormal.
 #[inline(always)]

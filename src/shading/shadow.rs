@@ -35,14 +35,21 @@ pub fn shell_shadow(
     shadow_lookup: Vec2,
     lookups: u32,
 ) -> f32 {
+    let point = lookup_points(uv, shadow_lookup, lookups);
+    let mut shadow = 0.0;
+    for k in 1..=lookups {
+        shadow += saturate(sample_alpha(point(k)));
+    }
+    shadow
+}
+
+/// Lookup `k` of [`shell_shadow`]: `uv + shadow_lookup·(k/m)`, non-finite components as 0.
+#[inline(always)]
+fn lookup_points(uv: Vec2, shadow_lookup: Vec2, lookups: u32) -> impl Fn(u32) -> Vec2 {
     let finite = |v: Vec2| Vec2::new(finite_or_zero(v.x), finite_or_zero(v.y));
     let (uv, step) = (finite(uv), finite(shadow_lookup));
     let m = lookups as f32;
-    let mut shadow = 0.0;
-    for k in 1..=lookups {
-        shadow += saturate(sample_alpha(uv + step * (k as f32 / m)));
-    }
-    shadow
+    move |k| uv + step * (k as f32 / m)
 }
 
 /// [`shell_shadow`] with the lookups sampled four at a time (`sample_alpha_x4` gets four
@@ -55,24 +62,17 @@ pub fn shell_shadow_x4(
     shadow_lookup: Vec2,
     lookups: u32,
 ) -> f32 {
-    let finite = |v: Vec2| Vec2::new(finite_or_zero(v.x), finite_or_zero(v.y));
-    let (uv, step) = (finite(uv), finite(shadow_lookup));
-    let m = lookups as f32;
+    let point = lookup_points(uv, shadow_lookup, lookups);
     let mut shadow = 0.0;
-    let mut first = 1;
-    while first <= lookups {
-        let point = |lane: u32| {
-            let k = (first + lane).min(lookups);
-            uv + step * (k as f32 / m)
-        };
-        let alphas = sample_alpha_x4([point(0), point(1), point(2), point(3)]);
+    for first in (1..=lookups).step_by(4) {
+        let lane = |i: u32| point(first.saturating_add(i).min(lookups));
+        let alphas = sample_alpha_x4([lane(0), lane(1), lane(2), lane(3)]);
         for alpha in alphas
             .into_iter()
             .take((lookups - first + 1).min(4) as usize)
         {
             shadow += saturate(alpha);
         }
-        first += 4;
     }
     shadow
 }
