@@ -72,10 +72,11 @@ pub struct Texture {
 pub const MAX_TEXTURE_SIZE: u32 = 16384;
 
 impl Texture {
-    /// The mip level below `lod` and the fraction towards the next, `lod` clamped to the chain
-    /// (NaN → 0). `lod ≥ 0` after the clamp, so truncation is the floor.
+    /// The mip level `k` below `lod`, the next `k1` (`k` itself at the end of the chain) and
+    /// the fraction from `k` towards it, `lod` clamped to the chain (NaN → 0). `lod ≥ 0` after
+    /// the clamp, so truncation is the floor.
     #[inline]
-    fn level_and_fraction(&self, lod: f32) -> (usize, f32) {
+    fn trilinear_indices(&self, lod: f32) -> (usize, usize, f32) {
         let max = (self.levels.len() - 1) as f32;
         let lod = if lod.is_nan() {
             0.0
@@ -83,7 +84,7 @@ impl Texture {
             lod.clamp(0.0, max)
         };
         let k = lod as usize;
-        (k, lod - k as f32)
+        (k, (k + 1).min(self.levels.len() - 1), lod - k as f32)
     }
 
     /// Builds a texture and its mip chain. Fails when the size is zero, too large, or does not
@@ -328,16 +329,22 @@ impl Sampler {
     /// Trilinear sample at an explicit level of detail (clamped to the chain).
     #[inline]
     pub fn sample_level(&self, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
-        let (k, frac) = texture.level_and_fraction(lod);
-        let k1 = (k + 1).min(texture.levels.len() - 1);
-        let (lower, upper) = (&texture.levels[k], &texture.levels[k1]);
-        let [fa, fb] = self.bilinear_footprints([lower, upper], uv);
-        let a = fa.filter(lower);
-        if frac == 0.0 || k1 == k {
-            return a;
+        self.trilinear_levels(texture, lod).sample(uv)
+    }
+
+    /// What a trilinear sample of `texture` at level of detail `lod` reads besides the
+    /// coordinate: the two levels, the fraction between them and their addressing. Lanes that
+    /// share `lod` (a quad's) choose them once; [`TrilinearLevels::sample`] then gives the same
+    /// values as [`Sampler::sample_level`].
+    #[inline]
+    pub fn trilinear_levels<'a>(&self, texture: &'a Texture, lod: f32) -> TrilinearLevels<'a> {
+        let (k, k1, frac) = texture.trilinear_indices(lod);
+        let levels = [&texture.levels[k], &texture.levels[k1]];
+        TrilinearLevels {
+            levels,
+            blend: (frac != 0.0 && k1 != k).then_some(frac),
+            addressing: self.footprint_addressing(levels),
         }
-        let b = fb.filter(upper);
-        a + (b - a) * frac
     }
 
     /// Two textures of the same size sampled at the same point and level of detail: the same
@@ -351,24 +358,35 @@ impl Sampler {
         uv: Vec2,
         lod: f32,
     ) -> (Vec4, Vec4) {
+        match self.trilinear_pair(first, second, lod) {
+            Some(pair) => pair.sample(uv),
+            None => (
+                self.sample_level(first, uv, lod),
+                self.sample_level(second, uv, lod),
+            ),
+        }
+    }
+
+    /// [`Sampler::trilinear_levels`] of two textures with the same mip chain shape (`None`
+    /// otherwise): [`TrilinearPair::sample`] gives the values of [`Sampler::sample_level_pair`].
+    #[inline]
+    pub fn trilinear_pair<'a>(
+        &self,
+        first: &'a Texture,
+        second: &'a Texture,
+        lod: f32,
+    ) -> Option<TrilinearPair<'a>> {
         if first.levels.len() != second.levels.len()
             || first.width() != second.width()
             || first.height() != second.height()
         {
-            return (
-                self.sample_level(first, uv, lod),
-                self.sample_level(second, uv, lod),
-            );
+            return None;
         }
-        let (k, frac) = first.level_and_fraction(lod);
-        let k1 = (k + 1).min(first.levels.len() - 1);
-        let [fa, fb] = self.bilinear_footprints([&first.levels[k], &first.levels[k1]], uv);
-        let (a1, a2) = (fa.filter(&first.levels[k]), fa.filter(&second.levels[k]));
-        if frac == 0.0 || k1 == k {
-            return (a1, a2);
-        }
-        let (b1, b2) = (fb.filter(&first.levels[k1]), fb.filter(&second.levels[k1]));
-        (a1 + (b1 - a1) * frac, a2 + (b2 - a2) * frac)
+        let (k, k1, _) = first.trilinear_indices(lod);
+        Some(TrilinearPair {
+            first: self.trilinear_levels(first, lod),
+            second: [&second.levels[k], &second.levels[k1]],
+        })
     }
 
     /// The nearest texel of mip level `round(lod)` (clamped to the chain, NaN → 0): one texel
@@ -392,37 +410,30 @@ impl Sampler {
         UNORM8[usize::from(self.nearest_texel(level, uv)[3])]
     }
 
-    /// [`Sampler::alpha_nearest_in`] at four points, the same four values: the coordinates go
-    /// through the clamp, the floor and the addressing as packed lanes.
+    /// What [`Sampler::alpha_nearest_in`] reads of `level` besides the coordinate, for lookups
+    /// four at a time ([`NearestLookup::alpha_x4`]); lanes that share a level choose it once.
     #[inline]
-    pub fn alpha_nearest_in_x4(&self, level: &MipLevel, points: [Vec2; 4]) -> [f32; 4] {
-        let (width, height) = (level.width, level.height);
-        let x = floor_texel_x4(f32x4::new(points.map(|p| p.x)) * f32x4::splat(width as f32));
-        let y = floor_texel_x4(f32x4::new(points.map(|p| p.y)) * f32x4::splat(height as f32));
-        let (x, y) = (
-            self.address_x4(x, [width; 4], [self.address_u; 4]),
-            self.address_x4(y, [height; 4], [self.address_v; 4]),
-        );
-        let (x, y) = (x.to_array(), y.to_array());
-        std::array::from_fn(|i| {
-            let texel = level.texels[y[i] as usize * width as usize + x[i] as usize];
-            UNORM8[usize::from(texel[3])]
-        })
+    pub fn nearest_lookup<'a>(&self, level: &'a MipLevel) -> NearestLookup<'a> {
+        NearestLookup {
+            level,
+            u: LaneAddressing::new([level.width; 4], [self.address_u; 4]),
+            v: LaneAddressing::new([level.height; 4], [self.address_v; 4]),
+        }
     }
 
-    /// [`address`] of four lanes, each with its own size and mode.
-    #[inline(always)]
-    fn address_x4(&self, index: i32x4, size: [u32; 4], modes: [AddressMode; 4]) -> i32x4 {
-        if modes.iter().all(|&m| m == AddressMode::Wrap) && size.iter().all(|n| n.is_power_of_two())
-        {
-            // Masking a two's-complement index is its Euclidean remainder by a power of two.
-            index & i32x4::new(size.map(|n| n as i32 - 1))
-        } else {
-            let index = index.to_array();
-            i32x4::new(std::array::from_fn(|lane| {
-                address(i64::from(index[lane]), size[lane], modes[lane]) as i32
-            }))
-        }
+    /// The sizes and modes of the four lanes of [`TrilinearLevels::footprints`]: x and y of
+    /// the lower level, x and y of the upper.
+    #[inline]
+    fn footprint_addressing(&self, [a, b]: [&MipLevel; 2]) -> LaneAddressing {
+        LaneAddressing::new(
+            [a.width, a.height, b.width, b.height],
+            [
+                self.address_u,
+                self.address_v,
+                self.address_u,
+                self.address_v,
+            ],
+        )
     }
 
     #[inline]
@@ -442,33 +453,99 @@ impl Sampler {
 
     #[inline]
     fn bilinear(&self, level: &MipLevel, uv: Vec2) -> Vec4 {
-        self.bilinear_footprints([level, level], uv)[0].filter(level)
+        let levels = [level, level];
+        TrilinearLevels {
+            levels,
+            blend: None,
+            addressing: self.footprint_addressing(levels),
+        }
+        .sample(uv)
+    }
+}
+
+/// Four lanes of texel indices to address, each with its own size and mode, fixed for a run
+/// of lookups.
+#[derive(Clone, Copy, Debug)]
+struct LaneAddressing {
+    size: [u32; 4],
+    size_f32: f32x4,
+    modes: [AddressMode; 4],
+    /// `size − 1` when every lane wraps on a power-of-two size: addressing is then a mask (the
+    /// Euclidean remainder of a two's-complement index).
+    wrap_mask: Option<i32x4>,
+}
+
+impl LaneAddressing {
+    #[inline(always)]
+    fn new(size: [u32; 4], modes: [AddressMode; 4]) -> Self {
+        let masks = modes.iter().all(|&m| m == AddressMode::Wrap)
+            && size.iter().all(|n| n.is_power_of_two());
+        LaneAddressing {
+            size,
+            size_f32: f32x4::new(size.map(|n| n as f32)),
+            modes,
+            wrap_mask: masks.then(|| i32x4::new(size.map(|n| n as i32 - 1))),
+        }
     }
 
-    /// The four texels and the weights of a bilinear sample of each of two levels (a
-    /// trilinear sample's pair): the x and y of both levels go through the coordinate clamp,
-    /// the floor and the addressing together, as four packed lanes.
+    /// [`address`] of each lane.
+    #[inline(always)]
+    fn address(&self, index: i32x4) -> i32x4 {
+        match self.wrap_mask {
+            Some(mask) => index & mask,
+            None => {
+                let index = index.to_array();
+                i32x4::new(std::array::from_fn(|lane| {
+                    address(i64::from(index[lane]), self.size[lane], self.modes[lane]) as i32
+                }))
+            }
+        }
+    }
+}
+
+/// The levels, blend fraction and addressing of a trilinear sample at one level of detail,
+/// from [`Sampler::trilinear_levels`].
+#[derive(Clone, Copy, Debug)]
+pub struct TrilinearLevels<'a> {
+    /// Levels `⌊λ⌋` and `⌊λ⌋ + 1` (the same level twice at the end of the chain).
+    levels: [&'a MipLevel; 2],
+    /// `λ − ⌊λ⌋`; `None` when only the lower level is read (a zero fraction, or the last
+    /// level).
+    blend: Option<f32>,
+    addressing: LaneAddressing,
+}
+
+impl TrilinearLevels<'_> {
+    /// The trilinear sample at `uv`: [`Sampler::sample_level`]'s value.
     #[inline]
-    fn bilinear_footprints(&self, levels: [&MipLevel; 2], uv: Vec2) -> [BilinearFootprint; 2] {
-        let [a, b] = levels;
-        let size = [a.width, a.height, b.width, b.height];
-        let position = f32x4::new([uv.x, uv.y, uv.x, uv.y]) * f32x4::new(size.map(|n| n as f32))
-            - f32x4::splat(0.5);
+    pub fn sample(&self, uv: Vec2) -> Vec4 {
+        let [fa, fb] = self.footprints(uv);
+        let a = fa.filter(self.levels[0]);
+        match self.blend {
+            None => a,
+            Some(frac) => {
+                let b = fb.filter(self.levels[1]);
+                a + (b - a) * frac
+            }
+        }
+    }
+
+    /// The four texels and the weights of a bilinear sample of each level: the x and y of
+    /// both levels go through the coordinate clamp, the floor and the addressing together, as
+    /// four packed lanes.
+    #[inline]
+    fn footprints(&self, uv: Vec2) -> [BilinearFootprint; 2] {
+        let addressing = &self.addressing;
+        let position =
+            f32x4::new([uv.x, uv.y, uv.x, uv.y]) * addressing.size_f32 - f32x4::splat(0.5);
         let position = texel_coordinate_x4(position);
         let floor = floor_x4(position);
         let fraction = (position - floor.round_float()).to_array();
-        let modes = [
-            self.address_u,
-            self.address_v,
-            self.address_u,
-            self.address_v,
-        ];
-        let low = self.address_x4(floor, size, modes);
-        let high = self.address_x4(floor + i32x4::ONE, size, modes);
-        let (low, high) = (low.to_array(), high.to_array());
+        let low = addressing.address(floor).to_array();
+        let high = addressing.address(floor + i32x4::ONE).to_array();
         std::array::from_fn(|level| {
             let (x, y) = (2 * level, 2 * level + 1);
-            let row = size[x] as usize;
+            let row = addressing.size[x] as usize;
             let (xa, xb) = (low[x] as usize, high[x] as usize);
             let (ya, yb) = (low[y] as usize, high[y] as usize);
             BilinearFootprint {
@@ -476,6 +553,61 @@ impl Sampler {
                 fx: fraction[x],
                 fy: fraction[y],
             }
+        })
+    }
+}
+
+/// Trilinear samples of two textures with one mip chain shape (a colour map and a tangent
+/// map) at one level of detail, from [`Sampler::trilinear_pair`]: the addressing is done once
+/// for both.
+#[derive(Clone, Copy, Debug)]
+pub struct TrilinearPair<'a> {
+    first: TrilinearLevels<'a>,
+    /// The second texture's levels, the same indices as the first's.
+    second: [&'a MipLevel; 2],
+}
+
+impl TrilinearPair<'_> {
+    /// Both samples at `uv`: [`Sampler::sample_level_pair`]'s values.
+    #[inline]
+    pub fn sample(&self, uv: Vec2) -> (Vec4, Vec4) {
+        let [fa, fb] = self.first.footprints(uv);
+        let [lower, upper] = self.first.levels;
+        let (a1, a2) = (fa.filter(lower), fa.filter(self.second[0]));
+        match self.first.blend {
+            None => (a1, a2),
+            Some(frac) => {
+                let (b1, b2) = (fb.filter(upper), fb.filter(self.second[1]));
+                (a1 + (b1 - a1) * frac, a2 + (b2 - a2) * frac)
+            }
+        }
+    }
+}
+
+/// Nearest reads of one mip level four at a time, from [`Sampler::nearest_lookup`].
+#[derive(Clone, Copy, Debug)]
+pub struct NearestLookup<'a> {
+    level: &'a MipLevel,
+    u: LaneAddressing,
+    v: LaneAddressing,
+}
+
+impl NearestLookup<'_> {
+    /// [`Sampler::alpha_nearest_in`] at four points `(u[i], v[i])`, the same four values: the
+    /// coordinates go through the clamp, the floor and the addressing as packed lanes.
+    #[inline]
+    pub fn alpha_x4(&self, u: [f32; 4], v: [f32; 4]) -> [f32; 4] {
+        let x = self
+            .u
+            .address(floor_texel_x4(f32x4::new(u) * self.u.size_f32));
+        let y = self
+            .v
+            .address(floor_texel_x4(f32x4::new(v) * self.v.size_f32));
+        let (x, y) = (x.to_array(), y.to_array());
+        let row = self.level.width as usize;
+        std::array::from_fn(|i| {
+            let texel = self.level.texels[y[i] as usize * row + x[i] as usize];
+            UNORM8[usize::from(texel[3])]
         })
     }
 }
@@ -607,8 +739,93 @@ mod tests {
         assert_eq!(pb, s.sample_level(&small, Vec2::splat(0.3), 0.7));
     }
 
+    /// A trilinear sample written out plainly from the module's rules, scalar in each step: the
+    /// reference for [`TrilinearLevels`] and [`TrilinearPair`], which choose the levels once.
+    fn plain_trilinear(s: &Sampler, texture: &Texture, uv: Vec2, lod: f32) -> Vec4 {
+        let last = texture.level_count() - 1;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, last as f32)
+        };
+        let k = lod.floor() as usize;
+        let k1 = (k + 1).min(last);
+        let frac = lod - k as f32;
+        let bilinear = |level: &MipLevel| {
+            let (texels, fx, fy) = scalar_footprint(s, level, uv);
+            let t = texels.map(|i| to_vec4(level.texels[i]));
+            let top = t[0] + (t[1] - t[0]) * fx;
+            let bottom = t[2] + (t[3] - t[2]) * fx;
+            top + (bottom - top) * fy
+        };
+        let a = bilinear(&texture.levels[k]);
+        if frac == 0.0 || k1 == k {
+            return a;
+        }
+        let b = bilinear(&texture.levels[k1]);
+        a + (b - a) * frac
+    }
+
+    #[test]
+    fn levels_chosen_once_give_the_plain_trilinear_sample() {
+        let pattern = |w: u32, h: u32, seed: u32| {
+            let texels = (0..w * h)
+                .map(|i| {
+                    std::array::from_fn(|c| {
+                        (i.wrapping_mul(2_654_435_761) >> (8 * c as u32 + seed)) as u8
+                    })
+                })
+                .collect();
+            Texture::from_rgba8(w, h, texels).expect("texture")
+        };
+        let shapes = [(16, 16), (12, 5), (1, 8), (1, 1)];
+        let modes = [AddressMode::Wrap, AddressMode::Clamp];
+        let lods = [
+            f32::NAN,
+            -1.0,
+            0.0,
+            0.25,
+            1.0,
+            1.5,
+            2.999,
+            3.0,
+            4.0,
+            100.0,
+            f32::INFINITY,
+        ];
+        for &(w, h) in &shapes {
+            let (first, second) = (pattern(w, h, 0), pattern(w, h, 3));
+            for (address_u, address_v) in modes.iter().flat_map(|&u| modes.map(|v| (u, v))) {
+                let s = Sampler {
+                    address_u,
+                    address_v,
+                    filter: Filter::Trilinear,
+                };
+                for (j, &lod) in lods.iter().enumerate() {
+                    let levels = s.trilinear_levels(&first, lod);
+                    let pair = s.trilinear_pair(&first, &second, lod).expect("same shape");
+                    for k in 0..300u32 {
+                        let uv = awkward_coordinates(k * 11 + j as u32);
+                        let bits = |v: Vec4| v.to_array().map(f32::to_bits);
+                        let expected = bits(plain_trilinear(&s, &first, uv, lod));
+                        assert_eq!(bits(levels.sample(uv)), expected, "{w}×{h} {uv} {lod}");
+                        assert_eq!(bits(s.sample_level(&first, uv, lod)), expected);
+                        let (a, b) = pair.sample(uv);
+                        assert_eq!(bits(a), expected, "{w}×{h} {uv} {lod}");
+                        assert_eq!(bits(b), bits(plain_trilinear(&s, &second, uv, lod)));
+                    }
+                }
+            }
+        }
+        let s = Sampler::default();
+        assert!(
+            s.trilinear_pair(&pattern(16, 16, 0), &pattern(16, 8, 0), 0.5)
+                .is_none()
+        );
+    }
+
     /// The footprint as first written, one axis at a time in i64: the reference the packed
-    /// [`Sampler::bilinear_footprints`] must equal.
+    /// [`TrilinearLevels::footprints`] must equal.
     fn scalar_footprint(s: &Sampler, level: &MipLevel, uv: Vec2) -> ([usize; 4], f32, f32) {
         let x = texel_coordinate(uv.x * level.width as f32 - 0.5);
         let y = texel_coordinate(uv.y * level.height as f32 - 0.5);
@@ -670,7 +887,12 @@ mod tests {
                     let uv = awkward_coordinates(k);
                     let a = &texture.levels[k as usize % texture.levels.len()];
                     let b = &texture.levels[(k as usize + 1) % texture.levels.len()];
-                    let packed = s.bilinear_footprints([a, b], uv);
+                    let levels = TrilinearLevels {
+                        levels: [a, b],
+                        blend: None,
+                        addressing: s.footprint_addressing([a, b]),
+                    };
+                    let packed = levels.footprints(uv);
                     for (footprint, level) in packed.iter().zip([a, b]) {
                         let (texels, fx, fy) = scalar_footprint(&s, level, uv);
                         assert_eq!(footprint.texels, texels, "{uv} {address_u:?} {address_v:?}");
@@ -678,7 +900,9 @@ mod tests {
                         assert_eq!(footprint.fy.to_bits(), fy.to_bits(), "{uv}");
                     }
                     let points = std::array::from_fn(|i| awkward_coordinates(k * 4 + i as u32));
-                    let alphas = s.alpha_nearest_in_x4(a, points);
+                    let alphas = s
+                        .nearest_lookup(a)
+                        .alpha_x4(points.map(|p| p.x), points.map(|p| p.y));
                     for (alpha, point) in alphas.iter().zip(points) {
                         assert_eq!(alpha.to_bits(), s.alpha_nearest_in(a, point).to_bits());
                     }

@@ -18,7 +18,7 @@
 //! ([`crate::shading::lanes`]). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::level_of_detail;
+use crate::raster::texture::{NearestLookup, TrilinearPair, level_of_detail};
 use crate::raster::{Fragment, Quad, QuadShader, Sampler, Texture, Varyings};
 use crate::scene::{DebugView, Scene, SpotKind};
 use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents, Vec3x4};
@@ -430,7 +430,14 @@ pub fn shade_fur(
 ) -> Option<Vec4> {
     let (ddx, ddy) = f.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
-    match surface(f.varyings(), lod, textures, maps, layer, p) {
+    match surface(
+        f.varyings(),
+        &LevelReads::new(textures, lod),
+        textures,
+        maps,
+        layer,
+        p,
+    ) {
         Surface::Discarded => None,
         Surface::Finished(colour) => Some(colour),
         Surface::Lit(lit) => {
@@ -462,6 +469,7 @@ pub fn shade_fur_quad(
 ) -> [Option<Vec4>; 4] {
     let (ddx, ddy) = quad.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
+    let reads = LevelReads::new(textures, lod);
     let varyings = quad.varyings();
     let mut out = [None; 4];
     let mut lit = [None; 4];
@@ -469,7 +477,7 @@ pub fn shade_fur_quad(
         if lanes & (1 << lane) == 0 {
             continue;
         }
-        match surface(&varyings[lane], lod, textures, maps, layer, p) {
+        match surface(&varyings[lane], &reads, textures, maps, layer, p) {
             Surface::Discarded => {}
             Surface::Finished(colour) => out[lane] = Some(colour),
             Surface::Lit(l) => lit[lane] = Some(l),
@@ -660,12 +668,33 @@ impl LitSurface {
     }
 }
 
-/// Steps 1–6 of the module's list for one fragment at level of detail `lod`: everything up to
-/// the strand lighting.
+/// What a layer's texture reads at one level of detail share, chosen once for the lanes of a
+/// quad: the mip levels of the colour and tangent maps and the shadow's nearest level.
+struct LevelReads<'a> {
+    lod: f32,
+    /// `None` when the colour and tangent maps differ in shape (then read one by one).
+    surface: Option<TrilinearPair<'a>>,
+    shadow: NearestLookup<'a>,
+}
+
+impl<'a> LevelReads<'a> {
+    #[inline(always)]
+    fn new(textures: LayerMaps<'a>, lod: f32) -> Self {
+        let sampler = textures.sampler;
+        LevelReads {
+            lod,
+            surface: sampler.trilinear_pair(textures.colour, textures.tangent, lod),
+            shadow: sampler.nearest_lookup(textures.colour.nearest_level(lod)),
+        }
+    }
+}
+
+/// Steps 1–6 of the module's list for one fragment at the level of detail of `reads`:
+/// everything up to the strand lighting.
 #[inline(always)]
 fn surface(
     v: &FurVaryings,
-    lod: f32,
+    reads: &LevelReads<'_>,
     textures: LayerMaps<'_>,
     maps: &SurfaceMaps,
     layer: &LayerParams,
@@ -693,8 +722,12 @@ fn surface(
         sampler,
         ..
     } = textures;
+    let lod = reads.lod;
     let uv = v.uv - v.wind_uv;
-    let (texel, encoded) = sampler.sample_level_pair(colour_map, tangent_map, uv, lod);
+    let (texel, encoded) = match &reads.surface {
+        Some(pair) => pair.sample(uv),
+        None => sampler.sample_level_pair(colour_map, tangent_map, uv, lod),
+    };
     let density = maps.density.as_ref().map(|m| maps.sample(m, v.mesh_uv).x);
     let coverage = match (density, textures.density) {
         (Some(d), Some(bands)) => shading::density_alpha(sampler.sample_level(bands, uv, lod), d),
@@ -735,15 +768,12 @@ fn surface(
                 layer.lookups,
             )
         }
-        _ => {
-            let level = colour_map.nearest_level(lod);
-            shading::shell_shadow_x4(
-                |points| sampler.alpha_nearest_in_x4(level, points),
-                uv,
-                offset,
-                layer.lookups,
-            )
-        }
+        _ => shading::shell_shadow_x4(
+            |u, v| reads.shadow.alpha_x4(u, v),
+            uv,
+            offset,
+            layer.lookups,
+        ),
     };
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);

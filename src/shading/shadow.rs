@@ -4,6 +4,7 @@
 
 use super::numeric::{finite_or_zero, saturate};
 use glam::{Vec2, Vec3};
+use wide::f32x4;
 
 /// Number of shadow lookups for a shell (thesis 3.2.2: "we divide the
 /// (numberOfTotalShell − currentShell) with n, let this number be m"; table 4.4's
@@ -35,38 +36,67 @@ pub fn shell_shadow(
     shadow_lookup: Vec2,
     lookups: u32,
 ) -> f32 {
-    let point = lookup_points(uv, shadow_lookup, lookups);
+    let path = LookupPath::new(uv, shadow_lookup, lookups);
     let mut shadow = 0.0;
     for k in 1..=lookups {
-        shadow += saturate(sample_alpha(point(k)));
+        shadow += saturate(sample_alpha(path.point(k)));
     }
     shadow
 }
 
-/// Lookup `k` of [`shell_shadow`]: `uv + shadow_lookup·(k/m)`, non-finite components as 0.
-#[inline(always)]
-fn lookup_points(uv: Vec2, shadow_lookup: Vec2, lookups: u32) -> impl Fn(u32) -> Vec2 {
-    let finite = |v: Vec2| Vec2::new(finite_or_zero(v.x), finite_or_zero(v.y));
-    let (uv, step) = (finite(uv), finite(shadow_lookup));
-    let m = lookups as f32;
-    move |k| uv + step * (k as f32 / m)
+/// Where the lookups of [`shell_shadow`] land: `uv + shadow_lookup·(k/m)`, non-finite
+/// components as 0.
+struct LookupPath {
+    uv: Vec2,
+    step: Vec2,
+    m: f32,
 }
 
-/// [`shell_shadow`] with the lookups sampled four at a time (`sample_alpha_x4` gets four
-/// points and returns their alphas): the same points, and the same sum in the same order, so
-/// the same bits. Lanes past the last lookup repeat it and are not added.
+impl LookupPath {
+    #[inline(always)]
+    fn new(uv: Vec2, shadow_lookup: Vec2, lookups: u32) -> Self {
+        let finite = |v: Vec2| Vec2::new(finite_or_zero(v.x), finite_or_zero(v.y));
+        LookupPath {
+            uv: finite(uv),
+            step: finite(shadow_lookup),
+            m: lookups as f32,
+        }
+    }
+
+    /// Lookup `k`.
+    #[inline(always)]
+    fn point(&self, k: u32) -> Vec2 {
+        self.uv + self.step * (k as f32 / self.m)
+    }
+
+    /// [`LookupPath::point`] of four lookups `k`, as packed u and v lanes: the same
+    /// operations lane by lane (glam's `Vec2` arithmetic is per component).
+    #[inline(always)]
+    fn points_x4(&self, k: [u32; 4]) -> ([f32; 4], [f32; 4]) {
+        let fraction = f32x4::new(k.map(|k| k as f32)) / f32x4::splat(self.m);
+        let along = |start: f32, step: f32| {
+            (f32x4::splat(start) + f32x4::splat(step) * fraction).to_array()
+        };
+        (along(self.uv.x, self.step.x), along(self.uv.y, self.step.y))
+    }
+}
+
+/// [`shell_shadow`] with the lookups sampled four at a time (`sample_alpha_x4` gets the u and
+/// v of four points and returns their alphas): the same points, and the same sum in the same
+/// order, so the same bits. Lanes past the last lookup repeat it and are not added.
 #[inline]
 pub fn shell_shadow_x4(
-    mut sample_alpha_x4: impl FnMut([Vec2; 4]) -> [f32; 4],
+    mut sample_alpha_x4: impl FnMut([f32; 4], [f32; 4]) -> [f32; 4],
     uv: Vec2,
     shadow_lookup: Vec2,
     lookups: u32,
 ) -> f32 {
-    let point = lookup_points(uv, shadow_lookup, lookups);
+    let path = LookupPath::new(uv, shadow_lookup, lookups);
     let mut shadow = 0.0;
     for first in (1..=lookups).step_by(4) {
-        let lane = |i: u32| point(first.saturating_add(i).min(lookups));
-        let alphas = sample_alpha_x4([lane(0), lane(1), lane(2), lane(3)]);
+        let k = [0, 1, 2, 3].map(|i| first.saturating_add(i).min(lookups));
+        let (u, v) = path.points_x4(k);
+        let alphas = sample_alpha_x4(u, v);
         for alpha in alphas
             .into_iter()
             .take((lookups - first + 1).min(4) as usize)
@@ -155,7 +185,8 @@ mod tests {
             let lookups = k % 14;
             let mut seen = Vec::new();
             let batched = shell_shadow_x4(
-                |points| {
+                |u, v| {
+                    let points: [Vec2; 4] = std::array::from_fn(|i| Vec2::new(u[i], v[i]));
                     seen.extend(points);
                     points.map(alpha)
                 },
@@ -169,11 +200,38 @@ mod tests {
                 "{uv} {offset} {lookups}"
             );
             assert_eq!(seen.len(), lookups.div_ceil(4) as usize * 4);
+            let mut scalar_points = Vec::new();
+            shell_shadow(
+                |p| {
+                    scalar_points.push(p);
+                    0.0
+                },
+                uv,
+                offset,
+                lookups,
+            );
+            let bits = |points: &[Vec2]| {
+                points
+                    .iter()
+                    .map(|p| p.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                bits(&seen[..lookups as usize]),
+                bits(&scalar_points),
+                "{uv} {offset}"
+            );
         }
         for bad in [f32::NAN, f32::INFINITY] {
             let uv = Vec2::new(bad, 0.5);
             assert_eq!(
-                shell_shadow_x4(|p| p.map(alpha), uv, Vec2::X, 5).to_bits(),
+                shell_shadow_x4(
+                    |u, v| std::array::from_fn(|i| alpha(Vec2::new(u[i], v[i]))),
+                    uv,
+                    Vec2::X,
+                    5
+                )
+                .to_bits(),
                 shell_shadow(alpha, uv, Vec2::X, 5).to_bits()
             );
         }
