@@ -29,7 +29,11 @@ use glam::{Vec2, Vec3, Vec4};
 pub const ALPHA_DISCARD: f32 = 0.5 / 255.0;
 
 /// What the vertex stage hands the fur fragment stage.
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// `repr(C)` of `f32` fields only (bytemuck's `Pod` checks that there is no padding), so that
+/// interpolation can run over all components as one array.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FurVaryings {
     /// Fur texture coordinates (mesh uv × repeat).
     pub uv: Vec2,
@@ -58,23 +62,18 @@ pub struct FurVaryings {
     pub lean: Vec3,
 }
 
+/// Number of `f32` components of [`FurVaryings`].
+const FUR_VARYING_FLOATS: usize = size_of::<FurVaryings>() / size_of::<f32>();
+
 impl Varyings for FurVaryings {
+    /// Component by component `(a·wa + b·wb) + c·wc`, like every field's own `weighted_sum`,
+    /// over the struct seen as one array, which the compiler runs on packed registers.
     #[inline]
     fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
-        FurVaryings {
-            uv: Vec2::weighted_sum(&a.uv, wa, &b.uv, wb, &c.uv, wc),
-            light: Vec3::weighted_sum(&a.light, wa, &b.light, wb, &c.light, wc),
-            eye: Vec3::weighted_sum(&a.eye, wa, &b.eye, wb, &c.eye, wc),
-            shadow: Vec2::weighted_sum(&a.shadow, wa, &b.shadow, wb, &c.shadow, wc),
-            fade: f32::weighted_sum(&a.fade, wa, &b.fade, wb, &c.fade, wc),
-            object: Vec3::weighted_sum(&a.object, wa, &b.object, wb, &c.object, wc),
-            normal: Vec3::weighted_sum(&a.normal, wa, &b.normal, wb, &c.normal, wc),
-            wind_uv: Vec2::weighted_sum(&a.wind_uv, wa, &b.wind_uv, wb, &c.wind_uv, wc),
-            wind: Vec3::weighted_sum(&a.wind, wa, &b.wind, wb, &c.wind, wc),
-            mesh_uv: Vec2::weighted_sum(&a.mesh_uv, wa, &b.mesh_uv, wb, &c.mesh_uv, wc),
-            length: f32::weighted_sum(&a.length, wa, &b.length, wb, &c.length, wc),
-            lean: Vec3::weighted_sum(&a.lean, wa, &b.lean, wb, &c.lean, wc),
-        }
+        let [a, b, c] = [a, b, c].map(bytemuck::cast_ref::<Self, [f32; FUR_VARYING_FLOATS]>);
+        bytemuck::cast(<[f32; FUR_VARYING_FLOATS]>::weighted_sum(
+            a, wa, b, wb, c, wc,
+        ))
     }
 }
 
@@ -795,6 +794,48 @@ fn surface(
 mod tests {
     use super::*;
     use crate::shading::test_support::Lcg;
+
+    #[test]
+    fn varyings_interpolate_field_by_field() {
+        let mut rng = Lcg::new(17);
+        let mut random = |rng: &mut Lcg| {
+            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
+            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
+            bytemuck::cast::<_, FurVaryings>(floats)
+        };
+        for _ in 0..500 {
+            let (a, b, c) = (random(&mut rng), random(&mut rng), random(&mut rng));
+            let w = [
+                rng.range(-1.0, 2.0),
+                rng.range(-1.0, 2.0),
+                rng.range(-1.0, 2.0),
+            ];
+            let got = FurVaryings::weighted_sum(&a, w[0], &b, w[1], &c, w[2]);
+            let v2 = |f: fn(&FurVaryings) -> Vec2| {
+                Vec2::weighted_sum(&f(&a), w[0], &f(&b), w[1], &f(&c), w[2])
+            };
+            let v3 = |f: fn(&FurVaryings) -> Vec3| {
+                Vec3::weighted_sum(&f(&a), w[0], &f(&b), w[1], &f(&c), w[2])
+            };
+            let s = |f: fn(&FurVaryings) -> f32| (f(&a) * w[0] + f(&b) * w[1]) + f(&c) * w[2];
+            let expected = FurVaryings {
+                uv: v2(|v| v.uv),
+                light: v3(|v| v.light),
+                eye: v3(|v| v.eye),
+                shadow: v2(|v| v.shadow),
+                fade: s(|v| v.fade),
+                object: v3(|v| v.object),
+                normal: v3(|v| v.normal),
+                wind_uv: v2(|v| v.wind_uv),
+                wind: v3(|v| v.wind),
+                mesh_uv: v2(|v| v.mesh_uv),
+                length: s(|v| v.length),
+                lean: v3(|v| v.lean),
+            };
+            let bits = |v: &FurVaryings| bytemuck::cast::<_, [u32; FUR_VARYING_FLOATS]>(*v);
+            assert_eq!(bits(&got), bits(&expected));
+        }
+    }
 
     /// Normals of every kind: random, tiny, huge, zero, NaN.
     fn normals(rng: &mut Lcg) -> Vec<Vec3> {
