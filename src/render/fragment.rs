@@ -798,7 +798,7 @@ mod tests {
     #[test]
     fn varyings_interpolate_field_by_field() {
         let mut rng = Lcg::new(17);
-        let mut random = |rng: &mut Lcg| {
+        let random = |rng: &mut Lcg| {
             let mut floats = [0.0f32; FUR_VARYING_FLOATS];
             floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
             bytemuck::cast::<_, FurVaryings>(floats)
