@@ -196,9 +196,9 @@ pub struct MeshSettings {
     pub major_radius: f32,
     /// Torus: tube radius.
     pub minor_radius: f32,
-    /// Sphere, cylinder and leg: radius.
+    /// Sphere and cylinder: radius. (The leg has its own profile; `scale` sizes it.)
     pub radius: f32,
-    /// Cylinder and leg: length.
+    /// Cylinder: length.
     pub height: f32,
     /// Triangle count of procedural meshes (thesis `modelResolution`, base 500).
     pub model_resolution: u32,
