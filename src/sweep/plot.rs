@@ -24,22 +24,32 @@ const PALETTE: [[u8; 3]; 6] = [
     [23, 190, 207],
 ];
 
-/// Plots fps against the first parameter. Its values are placed by number when every one is a
-/// number, else evenly in point order. Rows with the same values of the other parameters form
-/// one line, labelled in a legend. `None` without rows.
+/// Plots fps against the first parameter that takes more than one value (the first parameter
+/// when none does), so that `--param number_of_spots=2 --param specular_tangents=1,3` plots
+/// against the tangents. Its values are placed by number when every one is a number, else
+/// evenly in point order. Rows with the same values of the other parameters form one line,
+/// labelled in a legend. `None` without rows.
 pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> {
     if rows.is_empty() || parameters.is_empty() {
         return None;
     }
+    let x_param = (0..parameters.len())
+        .find(|&i| rows.iter().any(|r| r.values[i] != rows[0].values[i]))
+        .unwrap_or(0);
     let numeric: Option<Vec<f64>> = rows
         .iter()
-        .map(|r| r.values[0].parse::<f64>().ok().filter(|v| v.is_finite()))
+        .map(|r| {
+            r.values[x_param]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+        })
         .collect();
-    // Categories: the distinct first-parameter values in order of appearance.
+    // Categories: the distinct values of the axis parameter in order of appearance.
     let mut categories: Vec<&str> = Vec::new();
     for r in rows {
-        if !categories.contains(&r.values[0].as_str()) {
-            categories.push(&r.values[0]);
+        if !categories.contains(&r.values[x_param].as_str()) {
+            categories.push(&r.values[x_param]);
         }
     }
     let xs: Vec<f64> = match &numeric {
@@ -49,7 +59,7 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
             .map(|r| {
                 categories
                     .iter()
-                    .position(|c| *c == r.values[0])
+                    .position(|c| *c == r.values[x_param])
                     .unwrap_or(0) as f64
             })
             .collect(),
@@ -96,7 +106,7 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
     // Series: rows grouped by the values of the other parameters, in order of appearance.
     let mut series: Vec<Series> = Vec::new();
     for (r, &x) in rows.iter().zip(&xs) {
-        let key = r.values[1..].to_vec();
+        let key = others(&r.values, x_param);
         match series.iter_mut().find(|(k, _)| *k == key) {
             Some((_, points)) => points.push((x, r.fps)),
             None => series.push((key, vec![(x, r.fps)])),
@@ -149,7 +159,7 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
             let mut seen: Vec<(f64, String)> = Vec::new();
             for (r, &x) in rows.iter().zip(&xs) {
                 if !seen.iter().any(|(v, _)| *v == x) {
-                    seen.push((x, r.values[0].clone()));
+                    seen.push((x, r.values[x_param].clone()));
                 }
             }
             seen
@@ -173,7 +183,7 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
             last_right = left + w;
         }
     }
-    let x_title = &parameters[0];
+    let x_title = &parameters[x_param];
     let x_title_w = text::text_width(x_title) as i64;
     text::draw(
         &mut image,
@@ -185,7 +195,7 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
     text::draw(&mut image, 8, 14, "FPS", INK);
     if series.len() > 1 {
         for (i, (key, _)) in series.iter().enumerate() {
-            let label: Vec<String> = parameters[1..]
+            let label: Vec<String> = others(parameters, x_param)
                 .iter()
                 .zip(key)
                 .map(|(n, v)| format!("{n}={v}"))
@@ -210,6 +220,16 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
 
 /// The values of the other parameters, and the (x, fps) points with those values.
 type Series = (Vec<String>, Vec<(f64, f64)>);
+
+/// All of `items` but the one at `axis`, in order.
+fn others(items: &[String], axis: usize) -> Vec<String> {
+    items
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != axis)
+        .map(|(_, v)| v.clone())
+        .collect()
+}
 
 fn paint(rgb: [u8; 3]) -> Paint<'static> {
     let mut p = Paint::default();
@@ -319,6 +339,29 @@ mod tests {
         assert!(!coloured_pixels(&image, PALETTE[0]).is_empty());
         assert!(!coloured_pixels(&image, PALETTE[1]).is_empty());
         assert!(coloured_pixels(&image, PALETTE[2]).is_empty());
+    }
+
+    #[test]
+    fn a_single_valued_first_parameter_is_not_the_axis() {
+        let parameters = vec![
+            "number_of_spots".to_string(),
+            "specular_tangents".to_string(),
+        ];
+        // fps falls with the tangents: plotted against them, one line falls left to right.
+        let rows = [row(0, &["2", "1"], 30.0), row(1, &["2", "3"], 10.0)];
+        let image = fps_plot(&parameters, &rows).expect("plot");
+        let pixels = coloured_pixels(&image, PALETTE[0]);
+        let (left, right) = (
+            pixels.iter().filter(|p| p.0 < WIDTH / 3).map(|p| p.1).min(),
+            pixels
+                .iter()
+                .filter(|p| p.0 > 2 * WIDTH / 3)
+                .map(|p| p.1)
+                .min(),
+        );
+        assert!(left.is_some() && right.is_some(), "{left:?} {right:?}");
+        assert!(left < right, "{left:?} {right:?}");
+        assert!(coloured_pixels(&image, PALETTE[1]).is_empty());
     }
 
     #[test]
