@@ -2,10 +2,21 @@
 //! finite value for every input, NaN and infinities included, so no shading term can leak a NaN
 //! into the framebuffer.
 
+use wide::f32x4;
+
 /// Clamps to `[0, 1]`; NaN becomes 0.
 #[inline]
 pub(crate) fn saturate(x: f32) -> f32 {
     if x > 0.0 { x.min(1.0) } else { 0.0 }
+}
+
+/// [`saturate`] of four lanes, the same bits (`−0` and NaN give `+0`), with compares and
+/// selects instead of a branch per lane: the branch mispredicts on data such as shadow alphas,
+/// which are 0 or not at random.
+#[inline(always)]
+pub(crate) fn saturate_x4(x: f32x4) -> f32x4 {
+    let at_most_one = x.simd_lt(f32x4::ONE).select(x, f32x4::ONE);
+    x.simd_gt(f32x4::ZERO).select(at_most_one, f32x4::ZERO)
 }
 
 /// Returns `x` when finite, else 0.
@@ -38,7 +49,7 @@ pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
 /// `libm::powf` itself.
 #[inline]
 pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
-    let x = base.map(saturate);
+    let x = saturate_x4(f32x4::new(base)).to_array();
     pow01_x4_from_log2(x, &log2_parts_x4(x), exponent)
 }
 
@@ -50,7 +61,7 @@ pub(crate) fn pow01_x4_two_exponents(
     a: [f32; 4],
     b: [f32; 4],
 ) -> ([f32; 4], [f32; 4]) {
-    let x = base.map(saturate);
+    let x = saturate_x4(f32x4::new(base)).to_array();
     let log2_x = log2_parts_x4(x);
     (
         pow01_x4_from_log2(x, &log2_x, a),
@@ -270,8 +281,43 @@ mod tests {
             }
         }
         assert_eq!(saturate(f32::NAN), 0.0);
+        assert_eq!(saturate(-0.0).to_bits(), 0.0f32.to_bits());
         assert_eq!(sanitize_exponent(f32::NAN), 1.0);
         assert_eq!(sanitize_exponent(-2.0), 0.0);
+    }
+
+    #[test]
+    fn four_lane_saturate_is_saturate_bit_for_bit() {
+        let mut values = vec![
+            f32::NAN,
+            -f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            1.0f32.next_up(),
+            1.0f32.next_down(),
+            f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MAX,
+        ];
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..4000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            values.push(f32::from_bits((state >> 32) as u32));
+        }
+        for chunk in values.chunks_exact(4) {
+            let lanes: [f32; 4] = chunk.try_into().expect("four");
+            let packed = saturate_x4(f32x4::new(lanes)).to_array();
+            for (got, x) in packed.iter().zip(lanes) {
+                assert_eq!(got.to_bits(), saturate(x).to_bits(), "{x:e}");
+            }
+        }
     }
 
     /// Bases that exercise every branch: the three intervals of the reduced mantissa, values

@@ -2,7 +2,7 @@
 //! inside the current shell texture, and count how opaque the texels met are. The number of
 //! steps shrinks from root to tip (`m = (N − i)/n`, the "height/n" of table 4.4).
 
-use super::numeric::{finite_or_zero, saturate};
+use super::numeric::{finite_or_zero, saturate, saturate_x4};
 use glam::{Vec2, Vec3};
 use wide::f32x4;
 
@@ -96,12 +96,13 @@ pub fn shell_shadow_x4(
     for first in (1..=lookups).step_by(4) {
         let k = [0, 1, 2, 3].map(|i| first.saturating_add(i).min(lookups));
         let (u, v) = path.points_x4(k);
-        let alphas = sample_alpha_x4(u, v);
-        for alpha in alphas
-            .into_iter()
-            .take((lookups - first + 1).min(4) as usize)
-        {
-            shadow += saturate(alpha);
+        // Surplus lanes are multiplied by 0 and add +0, which leaves the sum's bits alone: it
+        // starts at +0 and every saturated alpha is +0 or in (0, 1]. No branch on the count or
+        // on the alphas.
+        let counted = [0, 1, 2, 3].map(|i| f32::from(u8::from(first.saturating_add(i) <= lookups)));
+        let alphas = saturate_x4(f32x4::new(sample_alpha_x4(u, v))) * f32x4::new(counted);
+        for alpha in alphas.to_array() {
+            shadow += alpha;
         }
     }
     shadow
