@@ -429,9 +429,12 @@ pub fn shade_fur(
 ) -> Option<Vec4> {
     let (ddx, ddy) = f.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
+    let v = f.varyings();
+    let reads = LevelReads::new(textures, lod);
     match surface(
-        f.varyings(),
-        &LevelReads::new(textures, lod),
+        v,
+        v.normal.normalize_or_zero(),
+        &reads,
         textures,
         maps,
         layer,
@@ -470,13 +473,25 @@ pub fn shade_fur_quad(
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let reads = LevelReads::new(textures, lod);
     let varyings = quad.varyings();
+    // The burn lobes and the light spots need each lane's unit normal: four at once.
+    let unit_normals =
+        Vec3x4::from_lanes(varyings.each_ref().map(|v| v.normal)).normalize_or_zero();
     let mut out = [None; 4];
     let mut lit = [None; 4];
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
             continue;
         }
-        match surface(&varyings[lane], &reads, textures, maps, layer, p) {
+        let unit_normal = unit_normals.lane(lane);
+        match surface(
+            &varyings[lane],
+            unit_normal,
+            &reads,
+            textures,
+            maps,
+            layer,
+            p,
+        ) {
             Surface::Discarded => {}
             Surface::Finished(colour) => out[lane] = Some(colour),
             Surface::Lit(l) => lit[lane] = Some(l),
@@ -689,18 +704,19 @@ impl<'a> LevelReads<'a> {
 }
 
 /// Steps 1–6 of the module's list for one fragment at the level of detail of `reads`:
-/// everything up to the strand lighting.
+/// everything up to the strand lighting. `unit_normal` is `v.normal.normalize_or_zero()`,
+/// which the burn lobes and the light spots share.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // the fragment, what its quad shares, and the layer's state
 fn surface(
     v: &FurVaryings,
+    unit_normal: Vec3,
     reads: &LevelReads<'_>,
     textures: LayerMaps<'_>,
     maps: &SurfaceMaps,
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Surface {
-    // The burn lobes and the light spots each need the unit normal: normalised once.
-    let unit_normal = v.normal.normalize_or_zero();
     let burn = p.burn_outcome_at_unit_normal(unit_normal, layer);
     if burn == BurnOutcome::Burnt {
         return Surface::Discarded;
