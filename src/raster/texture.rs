@@ -569,7 +569,7 @@ pub struct TrilinearPair<'a> {
 
 impl TrilinearPair<'_> {
     /// Both samples at `uv`: [`Sampler::sample_level_pair`]'s values.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, uv: Vec2) -> (Vec4, Vec4) {
         let [fa, fb] = self.first.footprints(uv);
         let [lower, upper] = self.first.levels;
