@@ -1,8 +1,9 @@
 //! The lighting combination of thesis 3.2.3: dampened specular and the final colour, eq. 3.7,
 //! with one user weight per term.
 
-use super::numeric::saturate;
+use super::numeric::saturate_x4;
 use glam::Vec3;
+use wide::f32x4;
 
 /// Specular values strictly above this become [`DAMPENED_SPECULAR_MAX`] (thesis 3.2.3).
 pub const DAMPENING_THRESHOLD: f32 = 0.6;
@@ -90,14 +91,15 @@ pub fn final_colour(
     let lit = weights.diffuse * diffuse + weights.specular * specular;
     let highlight = weights.dampened * dampened;
     let dark = weights.shadow * shadow;
-    let channel = |s: f32, l: f32| {
-        saturate(weights.ambient * ambient * s + s * l * lit + l * highlight - dark)
-    };
-    Vec3::new(
-        channel(strand_colour.x, light_colour.x),
-        channel(strand_colour.y, light_colour.y),
-        channel(strand_colour.z, light_colour.z),
-    )
+    // The three channels (and an unused fourth) as packed lanes: each lane is the scalar
+    // formula's own operations in its order.
+    let lanes = |v: Vec3| f32x4::new([v.x, v.y, v.z, 0.0]);
+    let (s, l) = (lanes(strand_colour), lanes(light_colour));
+    let splat = f32x4::splat;
+    let sum = splat(weights.ambient * ambient) * s + s * l * splat(lit) + l * splat(highlight)
+        - splat(dark);
+    let [x, y, z, _] = saturate_x4(sum).to_array();
+    Vec3::new(x, y, z)
 }
 
 #[cfg(test)]
@@ -148,6 +150,71 @@ mod tests {
         // Six opaque lookups over a fully lit white strand leave it visible.
         let c = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 1.0, 0.0, 0.0, 6.0, &w);
         assert!(c.x > 0.5);
+    }
+
+    #[test]
+    fn packed_channels_give_the_scalar_formula_bit_for_bit() {
+        // The formula as written in the doc, one channel at a time in scalar f32.
+        #[allow(clippy::too_many_arguments)]
+        fn scalar(
+            s: Vec3,
+            l: Vec3,
+            a: f32,
+            d: f32,
+            sp: f32,
+            p: f32,
+            sh: f32,
+            w: &ShadingWeights,
+        ) -> Vec3 {
+            let lit = w.diffuse * d + w.specular * sp;
+            let (highlight, dark) = (w.dampened * p, w.shadow * sh);
+            let channel = |s: f32, l: f32| {
+                crate::shading::numeric::saturate(
+                    w.ambient * a * s + s * l * lit + l * highlight - dark,
+                )
+            };
+            Vec3::new(channel(s.x, l.x), channel(s.y, l.y), channel(s.z, l.z))
+        }
+        let mut rng = Lcg::new(22);
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            1e-40,
+            3e38,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let pick = |rng: &mut Lcg, k: usize| {
+            if k.is_multiple_of(5) {
+                specials[(k / 5 + rng.unit().to_bits() as usize) % specials.len()]
+            } else {
+                rng.range(-2.0, 3.0)
+            }
+        };
+        for k in 0..20_000 {
+            let mut v = [0.0f32; 16];
+            for (i, x) in v.iter_mut().enumerate() {
+                *x = pick(&mut rng, k * 16 + i);
+            }
+            let w = ShadingWeights {
+                ambient: v[11],
+                diffuse: v[12],
+                specular: v[13],
+                dampened: v[14],
+                shadow: v[15],
+            };
+            let (s, l) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+            let got = final_colour(s, l, v[6], v[7], v[8], v[9], v[10], &w);
+            let expected = scalar(s, l, v[6], v[7], v[8], v[9], v[10], &w);
+            assert_eq!(
+                got.to_array().map(f32::to_bits),
+                expected.to_array().map(f32::to_bits),
+                "{v:?}"
+            );
+        }
     }
 
     #[test]
