@@ -338,7 +338,16 @@ impl Sampler {
     /// values as [`Sampler::sample_level`].
     #[inline]
     pub fn trilinear_levels<'a>(&self, texture: &'a Texture, lod: f32) -> TrilinearLevels<'a> {
-        let (k, k1, frac) = texture.trilinear_indices(lod);
+        self.levels_at(texture, texture.trilinear_indices(lod))
+    }
+
+    /// [`Sampler::trilinear_levels`] from `Texture::trilinear_indices`.
+    #[inline]
+    fn levels_at<'a>(
+        &self,
+        texture: &'a Texture,
+        (k, k1, frac): (usize, usize, f32),
+    ) -> TrilinearLevels<'a> {
         let levels = [&texture.levels[k], &texture.levels[k1]];
         TrilinearLevels {
             levels,
@@ -382,9 +391,9 @@ impl Sampler {
         {
             return None;
         }
-        let (k, k1, _) = first.trilinear_indices(lod);
+        let indices @ (k, k1, _) = first.trilinear_indices(lod);
         Some(TrilinearPair {
-            first: self.trilinear_levels(first, lod),
+            first: self.levels_at(first, indices),
             second: [&second.levels[k], &second.levels[k1]],
         })
     }
