@@ -542,7 +542,7 @@ impl TrilinearLevels<'_> {
     /// The four texels and the weights of a bilinear sample of each level: the x and y of
     /// both levels go through the coordinate clamp, the floor and the addressing together, as
     /// four packed lanes.
-    #[inline]
+    #[inline(always)]
     fn footprints(&self, uv: Vec2) -> [BilinearFootprint; 2] {
         let addressing = &self.addressing;
         let position =
