@@ -119,3 +119,108 @@ fn frame_k_of_a_sequence_is_a_render_at_k_over_fps() {
         .expect("frames");
     assert_eq!(frames.len(), 4);
 }
+
+/// One straight vertical strand on a flat plane seen from straight above, far away (so that the
+/// parallax between layers is a fraction of a pixel): the right edge of its footprint is that of
+/// its top layer. `bend` is the scene's `[wind]` or `[gravity]` table.
+fn one_strand_scene(dir: &std::path::Path, seed: u32, bend: &str) -> pelage::scene::Scene {
+    // A 4 × 4 plane at y = 0, normal +y, u along +x and v along −z (so T × B = +y, eq. 3.3).
+    let obj = "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n\
+               vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\n\
+               f 1/1 4/4 3/3\nf 1/1 3/3 2/2\n";
+    std::fs::write(dir.join("plane.obj"), obj).expect("write plane");
+    let text = format!(
+        r#"seed = {seed}
+[image]
+width = 256
+height = 256
+background = [0.0, 0.0, 1.0]
+[camera]
+eye = [0.0, 100.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, -1.0]
+fov_y_deg = 2.8
+near = 50.0
+far = 200.0
+[mesh]
+kind = "obj"
+path = "plane.obj"
+[fur]
+number_of_strands = 1
+number_of_shells = 30
+texture_resolution = 128
+model_difference = 1.0
+texture_repeat = [1.0, 1.0]
+slope_deg = 0.0
+curl = 0.0
+jitter = 0.0
+min_height = 1.0
+base_thickness = 0.02
+tip_thickness = 0.02
+colour_variation = 0.0
+gaussian_sigma = 4.0
+fins = false
+[shading]
+debug_view = "alpha"
+{bend}
+"#
+    );
+    pelage::scene::Scene::parse(&text, "one-strand.toml", dir).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The rightmost column holding fur (a pixel that is neither the black skin of the alpha view
+/// nor the blue background), if any.
+fn rightmost_fur_column(image: &pelage::render::RenderedImage) -> Option<u32> {
+    let w = image.width as usize;
+    image
+        .rgba8
+        .chunks(4)
+        .enumerate()
+        .filter(|(_, p)| p[0] > 0 && p[0] == p[2])
+        .map(|(i, _)| (i % w) as u32)
+        .max()
+}
+
+#[test]
+fn wind_and_gravity_move_a_single_strand_once() {
+    // Thesis 3.3: the vertices move only back along −normal, the sideways motion is the texture
+    // lookup. Applied twice (vertices and texture), the top layer moved twice the model's
+    // displacement.
+    let dir = common::scratch("one-strand");
+    let wind = "[wind]\ndirection = [1.0, 0.0, 0.0]\nstrength = 0.8\nfrequency = 0.0\n\
+                elasticity = 0.0\nmax_bend = 0.6\n";
+    let gravity = "[gravity]\ndirection = [1.0, 0.0, 0.0]\nstrength = 0.35\n";
+    for bend in [wind, gravity] {
+        // A seed whose strand lies well inside the plane, so no part of it wraps over the tile.
+        let found = (1..64).find_map(|seed| {
+            let still = one_strand_scene(&dir, seed, "");
+            let image = PreparedScene::new(&still).ok()?.render(64).ok()?;
+            let right = rightmost_fur_column(&image)?;
+            (40..140).contains(&right).then_some((seed, right))
+        });
+        let (seed, still_right) = found.expect("a seed with the strand inside the plane");
+        let scene = one_strand_scene(&dir, seed, bend);
+        let prepared = PreparedScene::new(&scene).expect("prepares");
+        let moved = prepared.render(64).expect("renders");
+        let moved_right = rightmost_fur_column(&moved).expect("fur drawn");
+        // The model: the top layer (i = N − 1) at height h = (N − 1)/N · model_difference moves
+        // sideways by bend · h, the bend being the wind's force or the gravity's strength.
+        let n = scene.fur.number_of_shells as f32;
+        let h = (n - 1.0) / n * scene.fur.model_difference;
+        let bend_sine = match &scene.wind {
+            Some(w) => w.direction_and_force(0.0).1,
+            None => scene.gravity.as_ref().map_or(0.0, |g| g.strength),
+        };
+        let sideways = bend_sine * h;
+        // The layer sits at height √(h² − sideways²) after the pull; seen from 100 units above
+        // with a 2.8° field of view over 256 pixels.
+        let height = (h * h - sideways * sideways).sqrt();
+        let focal = 128.0 / (1.4f32.to_radians()).tan();
+        let expected = sideways * focal / (100.0 - height);
+        let measured = moved_right as f32 - still_right as f32;
+        assert!(
+            (measured - expected).abs() <= 1.0,
+            "{bend}: the top layer moved {measured} px, the model says {expected:.2} px"
+        );
+    }
+}

@@ -38,8 +38,9 @@
 //!   the shadow and wind projections need them);
 //! - `shell_NN`: the skin pushed out along `NORMAL` by `layers[NN].offset` (its own
 //!   `POSITION`; every other attribute and the indices shared with `skin`); per frame, the
-//!   vertex stage scales the offset by the length map, adds the wind's (thesis 3.3) or the
-//!   lean's displacement and the object's path offset, see `scene.json`'s `frame`;
+//!   vertex stage scales the offset by the length map, adds the part along the normal of the
+//!   wind's (thesis 3.3) or the lean's displacement (the sideways part is the texture lookup
+//!   `uv − wind_uv`) and the object's path offset, see `scene.json`'s `frame`;
 //! - `fins`: this frame's silhouette fins (view dependent, chosen on the CPU), with `POSITION`,
 //!   `NORMAL` (the root's vertex normal), `TEXCOORD_0` (fin uv, v = 0 at the root) and the fur
 //!   varyings of the oracle's fragment stage at each corner: `_LIGHT`, `_EYE` (tangent space of
@@ -458,7 +459,7 @@ fn scene_json(
             "texel": "byte / 255, linear",
             "tangent_encoding": "unorm8(t·0.5 + 0.5), tangent space (x = u, y = v, z = away from skin)",
             "fragment_order": "burn (3.4), length cut (shells), wind and lean reverse lookup (3.3), colour and tangent maps, density (bands on shells, a factor on fins), lod_alpha, colour map tint, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), lean-bent tangent, shell shadow (3.2.2; through the density bands), Kajiya–Kay (2.5, 2.7), dampened specular, eq. 3.7",
-            "vertex_order": "length = length map at the vertex (1 without); offset and strand height × length; displacement = wind_displacement (wind alone) or lean_displacement(wind direction·clamp(force) + lean + comb, …) with a lean; position + normal·offset + displacement + object offset",
+            "vertex_order": "length = length map at the vertex (1 without); offset and strand height × length; displacement = wind_displacement (wind alone) or lean_displacement(wind direction·clamp(force) + lean + comb, …) with a lean; position + normal·offset + vertex_pull(displacement) (only the part along the normal: the sideways part is the texture lookup uv − wind_uv) + object offset",
         },
     })
 }

@@ -401,6 +401,13 @@ fn wind_displacement(wind_dir: vec3<f32>, normal: vec3<f32>, force: f32, shell_f
     return offset - n * pull;
 }
 
+// vertex_pull: the vertex stage moves a layer only along the normal; the sideways part is the
+// texture's (wind_uv_offset).
+fn vertex_pull(displacement: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
+    let n = normalize_or_zero(normal);
+    return n * dot(displacement, n);
+}
+
 fn wind_uv_offset(displacement: vec3<f32>, normal: vec3<f32>, dpdu: vec3<f32>, dpdv: vec3<f32>) -> vec2<f32> {
     let n = normalize_or_zero(normal);
     let horizontal = displacement - n * dot(displacement, n);
@@ -734,7 +741,7 @@ fn vs_shell(v: MeshVertex) -> FurVaryings {
     if (has_wind) {
         wind_ts = to_tangent_space(direction * force, tf);
     }
-    let p = v.position + v.normal * offset + displacement + frame.offset.xyz;
+    let p = v.position + v.normal * offset + vertex_pull(displacement, v.normal) + frame.offset.xyz;
     let change = shadow_change(light, v.frame_normal, strand_height - offset);
     var out: FurVaryings;
     out.clip = frame.view_proj * vec4<f32>(p, 1.0);

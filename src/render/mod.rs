@@ -526,9 +526,10 @@ impl PreparedScene {
                     let length = maps.length_at(v.uv);
                     let strand_height = difference * length;
                     let offset = offset * length;
-                    // Wind (thesis 3.3) and lean: the layer moves with their part tangent to
-                    // the surface, more the higher it is, pulled back along −n so the strand
-                    // keeps its length.
+                    // Wind (thesis 3.3) and lean: the layer's displacement along the surface,
+                    // more the higher it is, is applied once, in texture space (`wind_uv`, the
+                    // reverse lookup); the vertices move only back along −n so the strand keeps
+                    // its length.
                     let lean = bending.lean_at(maps, v);
                     let displacement =
                         bending.displacement(lean, v.normal, layer.height_fraction, strand_height);
@@ -550,7 +551,8 @@ impl PreparedScene {
                     } else {
                         Vec3::ZERO
                     };
-                    let p = place(v.position + v.normal * offset + displacement);
+                    let pull = crate::shading::vertex_pull(displacement, v.normal);
+                    let p = place(v.position + v.normal * offset + pull);
                     let change = crate::shading::shadow_change(
                         light,
                         v.frame.normal,

@@ -114,6 +114,6 @@ pub use spots::{
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{
-    VIBRATION_RATIO, WindParams, bend_tangent, bend_tangent_x4, wind_displacement, wind_force,
-    wind_uv_offset,
+    VIBRATION_RATIO, WindParams, bend_tangent, bend_tangent_x4, vertex_pull, wind_displacement,
+    wind_force, wind_uv_offset,
 };

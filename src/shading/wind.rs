@@ -108,6 +108,18 @@ pub fn wind_displacement(
     offset - n * pull
 }
 
+/// The part of a layer's displacement that the vertex stage applies (thesis 3.3): only the pull
+/// back along the normal, `n̂·(displacement·n̂)`. The sideways part moves the texture instead
+/// ([`wind_uv_offset`], "we choose to animate in texture space"); moving the vertices sideways as
+/// well would move every layer twice its displacement and stretch the strands.
+///
+/// A zero normal gives zero (nothing is pulled).
+#[inline]
+pub fn vertex_pull(displacement: Vec3, normal: Vec3) -> Vec3 {
+    let n = normal.normalize_or_zero();
+    n * displacement.dot(n)
+}
+
 /// Fragment-stage reverse lookup (thesis 3.3: "as we are looking at the current pixel we have to
 /// know which pixel will be there"): the texture offset of the displacement's part tangent to the
 /// surface; the texel that lands at `uv` is read at `uv − offset`.
@@ -372,5 +384,27 @@ mod tests {
         assert_eq!(bend_tangent(Vec3::X, Vec3::splat(f32::NAN), 0.5), Vec3::X);
         assert_eq!(bend_tangent(Vec3::X, Vec3::Y, f32::NAN), Vec3::X);
         assert_eq!(bend_tangent(Vec3::ZERO, Vec3::ZERO, 1.0), Vec3::ZERO);
+    }
+
+    #[test]
+    fn vertex_pull_and_uv_offset_split_the_displacement_once() {
+        // The vertex stage's pull and the texture's sideways part add up to the displacement,
+        // and the pull keeps the strand's length: |sideways + (h − pull)·n̂| = h (f64 check).
+        let mut rng = Lcg::new(71);
+        for _ in 0..2000 {
+            let n = rng.direction();
+            let w = rng.direction();
+            let h = rng.range(0.01, 2.0);
+            let force = rng.range(-1.0, 1.0);
+            let d = wind_displacement(w, n, force, 1.0, h);
+            let pull = vertex_pull(d, n);
+            let sideways = d - pull;
+            let (n64, side64, pull64) = (n.as_dvec3(), sideways.as_dvec3(), pull.as_dvec3());
+            assert!(side64.dot(n64).abs() < 1e-5, "sideways part has no normal part");
+            assert!(pull64.cross(n64).length() < 1e-5, "the pull is along the normal");
+            let tip = side64 + n64 * f64::from(h) + pull64;
+            assert_close(tip.length() as f32, h, 1e-5 * (1.0 + h), "strand length kept");
+        }
+        assert_eq!(vertex_pull(Vec3::ONE, Vec3::ZERO), Vec3::ZERO);
     }
 }
