@@ -396,12 +396,13 @@ impl GpuContext {
                         })
                         .collect();
                     let (colour, tangent) = (self.upload(colour), self.upload(tangent));
+                    let fin_layer = prepared.fin_layer_params();
                     let group = layer_group(
                         [
-                            max_shell,
-                            max_shell,
-                            0,
-                            1.0f32.to_bits(),
+                            fin_layer.index,
+                            fin_layer.max_shell,
+                            fin_layer.lookups,
+                            fin_layer.height_fraction.to_bits(),
                             0,
                             1,
                             1.0f32.to_bits(),

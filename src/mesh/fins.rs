@@ -1,10 +1,18 @@
-//! Fin edges (thesis 3.1.2.2): the unique edges of a mesh and the silhouette test that picks
-//! which of them get a fin. Invariant: the edge list is sorted and has one entry per pair of
-//! distinct *positions*, so a UV seam never produces two fins on the same spot.
+//! Fin edges (thesis 3.1.2.2): the unique edges of a mesh, the tests that pick which of them get
+//! a fin, and the chains that give neighbouring fins one continuous texture coordinate.
+//! Invariant: the edge list is sorted and has one entry per pair of distinct *positions*, so a UV
+//! seam never produces two fins on the same spot; every output is in edge order, never in the
+//! order of a hash map.
 //!
-//! Thesis: "We can understand the silhouettes by having the dot product of the
-//! (eyePoint − triangleVertex), verticeNormal. For our system if the angle of these two is
-//! between 70° and 110° or 160° and 200° we draw the fin texture."
+//! Two selections:
+//! - **outline** (the default): an edge whose two faces disagree on facing the eye (one front,
+//!   one back), or a border edge: exactly the mesh's silhouette, a connected chain of edges with
+//!   no gaps and nothing elsewhere ([`outline_edges`]);
+//! - **angle windows** (the thesis): "We can understand the silhouettes by having the dot product
+//!   of the (eyePoint − triangleVertex), verticeNormal. For our system if the angle of these two
+//!   is between 70° and 110° or 160° and 200° we draw the fin texture" ([`silhouette_edges`]).
+//!   Measured on a 500-triangle torus, this picks a band of edges several faces wide, so fins
+//!   stand across the visible fur and read as light panels.
 
 use std::collections::BTreeMap;
 
@@ -138,6 +146,127 @@ pub fn silhouette_edges(
         .collect()
 }
 
+/// Thesis-free outline test: the indices into `edges` (ascending) of the edges on the mesh's
+/// silhouette seen from `eye`: a border edge (one face), or an edge two of whose faces lie on
+/// opposite sides of facing the eye (`(eye − m)·n_f` of opposite signs, `m` the edge's midpoint,
+/// which lies in the plane of both faces). Zero-area faces (zero normal) take no part. Edges with
+/// an out-of-range vertex are skipped.
+pub fn outline_edges(mesh: &Mesh, edges: &[Edge], eye: Vec3) -> Vec<usize> {
+    edges
+        .iter()
+        .enumerate()
+        .filter_map(|(k, e)| {
+            let a = mesh.vertices.get(e.vertices[0] as usize)?;
+            let b = mesh.vertices.get(e.vertices[1] as usize)?;
+            if e.is_boundary() {
+                return Some(k);
+            }
+            let to_eye = eye - (a.position + b.position) * 0.5;
+            let mut front = false;
+            let mut back = false;
+            for n in e.face_normals.iter().filter(|n| **n != Vec3::ZERO) {
+                let facing = to_eye.dot(*n);
+                front |= facing > 0.0;
+                back |= facing <= 0.0;
+            }
+            (front && back).then_some(k)
+        })
+        .collect()
+}
+
+/// One fin of a [`FinChain`]: an edge walked from `from` to `to` (mesh vertex indices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChainLink {
+    /// Index into the edge list.
+    pub edge: usize,
+    /// The vertex the walk enters the edge at.
+    pub from: u32,
+    /// The vertex it leaves by.
+    pub to: u32,
+}
+
+/// Selected edges joined end to end, so that the fin texture's `u` can run on along them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FinChain {
+    /// The edges in walking order; each link's `to` is the next one's `from`.
+    pub links: Vec<ChainLink>,
+    /// Whether the last link ends where the first begins (a loop round the outline).
+    pub closed: bool,
+}
+
+/// Joins the `selected` edges (indices into `edges`) into chains: a chain runs through vertices
+/// shared by exactly two selected edges and stops at a vertex shared by one or by three or more.
+/// Deterministic: open chains start at their end vertex of lowest index, scanned in edge order;
+/// loops start at their edge of lowest index, walked towards that edge's higher vertex first.
+/// Every selected edge is in exactly one chain.
+pub fn fin_chains(edges: &[Edge], selected: &[usize]) -> Vec<FinChain> {
+    let mut selected: Vec<usize> = selected
+        .iter()
+        .copied()
+        .filter(|&k| k < edges.len())
+        .collect();
+    selected.sort_unstable();
+    selected.dedup();
+    // Vertex → selected edges touching it, in edge order.
+    let mut incident: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for &k in &selected {
+        for v in edges[k].vertices {
+            incident.entry(v).or_default().push(k);
+        }
+    }
+    let degree = |v: u32| incident.get(&v).map_or(0, Vec::len);
+    let mut used: BTreeMap<usize, bool> = selected.iter().map(|&k| (k, false)).collect();
+    let mut chains = Vec::new();
+    let walk = |start_edge: usize, start_vertex: u32, used: &mut BTreeMap<usize, bool>| {
+        let mut links = Vec::new();
+        let (mut edge, mut from) = (start_edge, start_vertex);
+        loop {
+            used.insert(edge, true);
+            let [a, b] = edges[edge].vertices;
+            let to = if from == a { b } else { a };
+            links.push(ChainLink { edge, from, to });
+            if degree(to) != 2 {
+                break;
+            }
+            let next = incident
+                .get(&to)
+                .and_then(|list| list.iter().copied().find(|&e| used.get(&e) == Some(&false)));
+            match next {
+                Some(e) => (edge, from) = (e, to),
+                None => break,
+            }
+        }
+        let closed = links.len() > 1 && links.last().map(|l| l.to) == Some(start_vertex);
+        FinChain { links, closed }
+    };
+    // Open chains first, from each end vertex (degree 1, or a branch point).
+    for &k in &selected {
+        for v in edges[k].vertices {
+            if used.get(&k) == Some(&false) && degree(v) != 2 {
+                chains.push(walk(k, v, &mut used));
+            }
+        }
+    }
+    // What is left are loops through vertices of degree 2.
+    for &k in &selected {
+        if used.get(&k) == Some(&false) {
+            chains.push(walk(k, edges[k].vertices[0], &mut used));
+        }
+    }
+    chains
+}
+
+/// How squarely a fin faces the eye, the opacity of fins chosen by [`outline_edges`] (as Lengyel
+/// et al. fade fins by the angle between the fin plane and the view): `|m̂·ê|` with `m̂` the fin
+/// plane's normal `along × up` and `ê` the direction to the eye. A fin seen face-on (its edge
+/// across the line of sight) is opaque; one seen edge-on, whose texture would be squeezed into a
+/// streak, vanishes. Zero for a degenerate fin or eye.
+pub fn fin_facing(along: Vec3, up: Vec3, to_eye: Vec3) -> f32 {
+    let m = along.cross(up).normalize_or_zero();
+    let e = to_eye.normalize_or_zero();
+    m.dot(e).abs().min(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -239,5 +368,72 @@ mod tests {
             e.iter().all(|e| e.faces.len() == 2),
             "a closed sphere has no border"
         );
+    }
+
+    #[test]
+    fn outline_of_a_sphere_is_one_closed_loop_at_the_rim() {
+        let mesh = sphere(1.0, 2000);
+        let e = edges(&mesh);
+        let eye = Vec3::new(0.3, 0.2, 10.0);
+        let outline = outline_edges(&mesh, &e, eye);
+        assert!(!outline.is_empty());
+        for &k in &outline {
+            let [a, b] = e[k].vertices;
+            let mid =
+                (mesh.vertices[a as usize].position + mesh.vertices[b as usize].position) / 2.0;
+            // Only the rim: the view direction nearly in the tangent plane.
+            let n = mid.normalize();
+            let to_eye = (eye - mid).normalize();
+            assert!(n.dot(to_eye).abs() < 0.2, "{mid}");
+        }
+        // Far fewer edges than the thesis's 70°–110° window picks.
+        let window = FinWindows {
+            windows: vec![(70.0, 110.0)],
+        };
+        assert!(outline.len() * 3 < silhouette_edges(&mesh, &e, eye, &window).len());
+        let chains = fin_chains(&e, &outline);
+        assert_eq!(chains.len(), 1, "one loop round a convex object");
+        let chain = &chains[0];
+        assert!(chain.closed);
+        assert_eq!(chain.links.len(), outline.len());
+        assert!(chain.links.windows(2).all(|w| w[0].to == w[1].from));
+    }
+
+    #[test]
+    fn chains_stop_at_ends_and_branches_and_cover_every_edge() {
+        // A path 0-1-2-3 and a branch 1-4: three open chains meeting at vertex 1.
+        let mk = |a: u32, b: u32| Edge {
+            vertices: [a, b],
+            faces: vec![0],
+            face_normals: vec![Vec3::Z],
+        };
+        let e = vec![mk(0, 1), mk(1, 2), mk(1, 4), mk(2, 3)];
+        let chains = fin_chains(&e, &[3, 2, 1, 0, 0]);
+        let mut seen: Vec<usize> = chains
+            .iter()
+            .flat_map(|c| c.links.iter().map(|l| l.edge))
+            .collect();
+        seen.sort_unstable();
+        assert_eq!(seen, vec![0, 1, 2, 3]);
+        assert!(chains.iter().all(|c| !c.closed));
+        let long = chains
+            .iter()
+            .find(|c| c.links.len() == 2)
+            .expect("1-2-3 runs on");
+        assert_eq!(long.links[0].from, 1);
+        assert_eq!(long.links[1].to, 3);
+        // The same input in another order gives the same chains.
+        assert_eq!(chains, fin_chains(&e, &[0, 1, 2, 3]));
+    }
+
+    #[test]
+    fn facing_is_one_face_on_and_zero_edge_on() {
+        let along = Vec3::X;
+        let up = Vec3::Y;
+        assert!((fin_facing(along, up, Vec3::Z * 5.0) - 1.0).abs() < 1e-6);
+        assert!(fin_facing(along, up, Vec3::X * 5.0).abs() < 1e-6);
+        let diagonal = fin_facing(along, up, Vec3::new(1.0, 0.0, 1.0));
+        assert!((f64::from(diagonal) - 0.5f64.sqrt()).abs() < 1e-6);
+        assert_eq!(fin_facing(Vec3::ZERO, up, Vec3::Z), 0.0);
     }
 }

@@ -20,7 +20,10 @@ use std::path::PathBuf;
 
 use glam::{Vec2, Vec3};
 
-pub use fins::{Edge, FinWindows, edges, is_silhouette, silhouette_edges};
+pub use fins::{
+    ChainLink, Edge, FinChain, FinWindows, edges, fin_chains, fin_facing, is_silhouette,
+    outline_edges, silhouette_edges,
+};
 pub use frame::{TangentFrame, face_tangents};
 pub use obj::{LoadedMesh, ObjSummary, load_obj, load_obj_bytes, scan_obj};
 pub use procedural::{

@@ -22,7 +22,7 @@ use crate::raster::{
     AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
     Framebuffer, RasterError, RasterStats, Sampler, Texture,
 };
-use crate::scene::{MeshKind, Scene, ShellSpacingSetting};
+use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
 use fragment::{FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, ShadeParams};
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
@@ -243,6 +243,31 @@ pub fn fin_fade(windows: &[[f32; 2]], to_eye: Vec3, normal: Vec3) -> f32 {
             })
         })
         .unwrap_or(0.0)
+}
+
+/// The part of the fur's height a fin's self-shadow reaches over, and whose shell's lookups it
+/// takes: beside the shells a fin shows mostly the top of the fur (the shells cover the rest), so
+/// it is shadowed as the shell a fifth of the height below the tips is. Measured on the gravity,
+/// torus and leg scenes, fin fur then lies within 10 % of the luminance of the shell fur beside
+/// it (`tests/fins.rs`); with the root shell's lookups over the whole height it was 30–55 %
+/// darker, with none 7–22 % paler.
+pub const FIN_SHADOW_REACH: f32 = 0.2;
+
+/// The fins' layer: they stand for the fur's full height, so they burn as the top shell does;
+/// their self-shadow is that of the shell [`FIN_SHADOW_REACH`] below the tips.
+fn fin_layer_params(s: &Scene) -> LayerParams {
+    let n = s.fur.number_of_shells;
+    LayerParams {
+        index: n - 1,
+        max_shell: n - 1,
+        lookups: crate::shading::shadow_lookup_count(
+            n,
+            n - (n as f32 * FIN_SHADOW_REACH) as u32,
+            s.shading.shadow_divisor,
+        ),
+        height_fraction: 1.0,
+        lod_span: 1.0,
+    }
 }
 
 /// Mean world length of one fur tile along u and v, from the mesh's dp/du, dp/dv.
@@ -499,6 +524,43 @@ impl PreparedScene {
             address_v: AddressMode::Wrap,
             filter: Filter::Trilinear,
         };
+        // Fins at the silhouette, before the shells: every shell fragment that can show beside a
+        // fin belongs to the faces turned to the eye in front of it, so it blends over the fin,
+        // and the fins add fur only where the shells run out. They stand for the fur's full
+        // height, so they burn as the top shell does.
+        let fin_fade = lod.as_ref().map(|l| l.fin_fade);
+        if let Some(fin) = &self.fin
+            && fin_fade != Some(0.0)
+        {
+            let (vertices, triangles) =
+                self.fin_geometry(camera.eye, light, bending, shade, moved, fin_fade);
+            let fin_sampler = Sampler {
+                address_u: AddressMode::Wrap,
+                address_v: AddressMode::Clamp,
+                filter: Filter::Trilinear,
+            };
+            let fin_layer = fin_layer_params(s);
+            frame.draw_quads(
+                &vertices,
+                &triangles,
+                DrawState {
+                    cull: CullMode::None,
+                    ..blended
+                },
+                |&(p, v): &(Vec3, FurVaryings)| ClipVertex {
+                    position: view_proj * p.extend(1.0),
+                    varyings: v,
+                },
+                FurShader {
+                    textures: fin.maps(fin_sampler, false),
+                    maps,
+                    layer: fin_layer,
+                    params: shade,
+                    stage,
+                },
+            )?;
+        }
+
         let difference = s.fur.model_difference;
         let eye = camera.eye;
         for (i, textures) in self.shells.iter().enumerate() {
@@ -584,47 +646,6 @@ impl PreparedScene {
                     textures: textures.maps(shell_sampler, true),
                     maps,
                     layer,
-                    params: shade,
-                    stage,
-                },
-            )?;
-        }
-
-        // Fins at the silhouette; they stand for the fur's full height, so they burn as the
-        // top shell does.
-        let fin_fade = lod.as_ref().map(|l| l.fin_fade);
-        if let Some(fin) = &self.fin
-            && fin_fade != Some(0.0)
-        {
-            let (vertices, triangles) =
-                self.fin_geometry(camera.eye, light, bending, shade, moved, fin_fade);
-            let fin_sampler = Sampler {
-                address_u: AddressMode::Wrap,
-                address_v: AddressMode::Clamp,
-                filter: Filter::Trilinear,
-            };
-            let fin_layer = LayerParams {
-                index: max_shell,
-                max_shell,
-                lookups: 0,
-                height_fraction: 1.0,
-                lod_span: 1.0,
-            };
-            frame.draw_quads(
-                &vertices,
-                &triangles,
-                DrawState {
-                    cull: CullMode::None,
-                    ..blended
-                },
-                |&(p, v): &(Vec3, FurVaryings)| ClipVertex {
-                    position: view_proj * p.extend(1.0),
-                    varyings: v,
-                },
-                FurShader {
-                    textures: fin.maps(fin_sampler, false),
-                    maps,
-                    layer: fin_layer,
                     params: shade,
                     stage,
                 },
@@ -737,85 +758,121 @@ impl PreparedScene {
                 .map(|w| (w[0], w[1]))
                 .collect(),
         };
-        let selected = mesh::fins::silhouette_edges(&self.mesh, &self.edges, object_eye, &windows);
+        let selected = match self.scene.fur.fin_selection {
+            FinSelectionSetting::Outline => {
+                mesh::fins::outline_edges(&self.mesh, &self.edges, object_eye)
+            }
+            FinSelectionSetting::AngleWindows => {
+                mesh::fins::silhouette_edges(&self.mesh, &self.edges, object_eye, &windows)
+            }
+        };
+        let chains = mesh::fins::fin_chains(&self.edges, &selected);
+        let vertex = |i: u32| self.mesh.vertices.get(i as usize);
+        let tile = self.tile_world_size.x;
         let mut vertices = Vec::with_capacity(selected.len() * 4);
         let mut triangles = Vec::with_capacity(selected.len() * 2);
-        for &e in &selected {
-            let edge = &self.edges[e];
-            let [ia, ib] = edge.vertices.map(|i| i as usize);
-            let (Some(a), Some(b)) = (self.mesh.vertices.get(ia), self.mesh.vertices.get(ib))
-            else {
-                continue;
+        for chain in &chains {
+            // The fin texture's u runs on along the chain at the shells' scale (one tile per
+            // `tile` world units), so neighbouring fins continue each other's strands; round a
+            // loop, the scale is stretched to a whole number of tiles so the loop closes too.
+            let length_of = |l: &mesh::fins::ChainLink| match (vertex(l.from), vertex(l.to)) {
+                (Some(a), Some(b)) => (b.position - a.position).length(),
+                _ => 0.0,
             };
-            let along = b.position - a.position;
-            let length = along.length();
-            let x = along.normalize_or_zero();
-            let up = (a.normal + b.normal).normalize_or_zero();
-            let z = (up - x * up.dot(x)).normalize_or_zero();
-            if length == 0.0 || z == Vec3::ZERO {
-                continue;
-            }
-            // A fin burns like the top shell; one surely burnt away is left out.
-            if shade
-                .burn
-                .as_ref()
-                .is_some_and(|burn| burn.surely_burnt([a.normal, b.normal, a.normal], top, top))
-            {
-                continue;
-            }
-            let frame = mesh::frame::TangentFrame {
-                tangent: x,
-                binormal: z.cross(x),
-                normal: z,
+            let total: f32 = chain.links.iter().map(length_of).sum();
+            let per_length = if chain.closed && total > 0.0 {
+                (total / tile).round().max(1.0) / total
+            } else {
+                1.0 / tile
             };
-            // The top corner over a skin vertex: the fin height times the painted length,
-            // bent like the top shell.
-            let top_of = |v: &mesh::Vertex| {
-                let length = maps.length_at(v.uv);
-                let height = self.fin_height * length;
-                let bend = bending.displacement(bending.lean_at(maps, v), v.normal, 1.0, height);
-                (v.position + v.normal * height + bend, length)
-            };
-            let (a_top, a_length) = top_of(a);
-            let (b_top, b_length) = top_of(b);
-            // Each fin starts at its first vertex's fur coordinate, so neighbouring fins do not
-            // all show the same strip of the fin texture.
-            let repeat = Vec2::from(self.scene.fur.texture_repeat);
-            let u0 = (a.uv * repeat).element_sum();
-            let u1 = u0 + length / self.tile_world_size.x;
-            let corners = [
-                (a.position, a, Vec2::new(u0, 0.0), 1.0),
-                (b.position, b, Vec2::new(u1, 0.0), 1.0),
-                (b_top, b, Vec2::new(u1, 1.0), b_length),
-                (a_top, a, Vec2::new(u0, 1.0), a_length),
-            ];
-            let base = vertices.len() as u32;
-            for (p, root, uv, length) in corners {
-                let p = place(p);
-                let fade = fin_fade(&self.scene.fur.fin_windows, eye - p, root.normal);
-                vertices.push((
-                    p,
-                    FurVaryings {
-                        uv,
-                        light: crate::shading::to_tangent_space(light, &frame),
-                        eye: crate::shading::to_tangent_space(eye - p, &frame),
-                        shadow: Vec2::ZERO,
-                        fade: match lod_fade {
-                            Some(l) => fade * l,
-                            None => fade,
+            let mut u = 0.0f32;
+            for link in &chain.links {
+                let (Some(a), Some(b)) = (vertex(link.from), vertex(link.to)) else {
+                    continue;
+                };
+                let along = b.position - a.position;
+                let length = along.length();
+                let (u0, u1) = (u, u + length * per_length);
+                u = u1;
+                let x = along.normalize_or_zero();
+                let up = (a.normal + b.normal).normalize_or_zero();
+                let z = (up - x * up.dot(x)).normalize_or_zero();
+                if length == 0.0 || z == Vec3::ZERO {
+                    continue;
+                }
+                // A fin burns like the top shell; one surely burnt away is left out.
+                if shade
+                    .burn
+                    .as_ref()
+                    .is_some_and(|burn| burn.surely_burnt([a.normal, b.normal, a.normal], top, top))
+                {
+                    continue;
+                }
+                let frame = mesh::frame::TangentFrame {
+                    tangent: x,
+                    binormal: z.cross(x),
+                    normal: z,
+                };
+                // The top corner over a skin vertex: the fin height times the painted length,
+                // bent like the top shell (fins have no texture lookup to carry the bend, so
+                // their top edge moves: the bend is applied once here too).
+                let top_of = |v: &mesh::Vertex| {
+                    let length = maps.length_at(v.uv);
+                    let height = self.fin_height * length;
+                    let bend =
+                        bending.displacement(bending.lean_at(maps, v), v.normal, 1.0, height);
+                    (v.position + v.normal * height + bend, length)
+                };
+                let (a_top, a_length) = top_of(a);
+                let (b_top, b_length) = top_of(b);
+                let corners = [
+                    (a.position, a, Vec2::new(u0, 0.0), 1.0),
+                    (b.position, b, Vec2::new(u1, 0.0), 1.0),
+                    (b_top, b, Vec2::new(u1, 1.0), b_length),
+                    (a_top, a, Vec2::new(u0, 1.0), a_length),
+                ];
+                // The fins' self-shadow (3.2.2 on the side view): the lookups run from each point
+                // towards the light over the fin's full height, in the fin's own texture, so the
+                // strands above and in front of it darken it and the sparse tips shade little.
+                let height = self.fin_height * 0.5 * (a_length + b_length);
+                let shadow = crate::shading::project_to_uv(
+                    crate::shading::shadow_change(light, z, FIN_SHADOW_REACH * height),
+                    x / per_length,
+                    z * height,
+                );
+                let base = vertices.len() as u32;
+                for (p, root, uv, length) in corners {
+                    let p = place(p);
+                    let fade = match self.scene.fur.fin_selection {
+                        FinSelectionSetting::Outline => mesh::fins::fin_facing(x, z, eye - p),
+                        FinSelectionSetting::AngleWindows => {
+                            fin_fade(&self.scene.fur.fin_windows, eye - p, root.normal)
+                        }
+                    };
+                    vertices.push((
+                        p,
+                        FurVaryings {
+                            uv,
+                            light: crate::shading::to_tangent_space(light, &frame),
+                            eye: crate::shading::to_tangent_space(eye - p, &frame),
+                            shadow,
+                            fade: match lod_fade {
+                                Some(l) => fade * l,
+                                None => fade,
+                            },
+                            object: root.position,
+                            normal: root.normal,
+                            wind_uv: Vec2::ZERO,
+                            wind: Vec3::ZERO,
+                            mesh_uv: root.uv,
+                            length,
+                            lean: Vec3::ZERO,
                         },
-                        object: root.position,
-                        normal: root.normal,
-                        wind_uv: Vec2::ZERO,
-                        wind: Vec3::ZERO,
-                        mesh_uv: root.uv,
-                        length,
-                        lean: Vec3::ZERO,
-                    },
-                ));
+                    ));
+                }
+                triangles.push([base, base + 1, base + 2]);
+                triangles.push([base, base + 2, base + 3]);
             }
-            triangles.push([base, base + 1, base + 2]);
-            triangles.push([base, base + 2, base + 3]);
         }
         (vertices, triangles)
     }
@@ -867,6 +924,11 @@ impl PreparedScene {
             height_fraction: i as f32 / n as f32,
             lod_span: 1.0,
         }
+    }
+
+    /// The per-layer parameters the fin pass hands to the fragment closure.
+    pub fn fin_layer_params(&self) -> LayerParams {
+        fin_layer_params(&self.scene)
     }
 
     /// The fin quads drawn at `time` (chosen on the CPU per frame, as the thesis does): each

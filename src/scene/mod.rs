@@ -234,6 +234,20 @@ pub enum ShellSpacingSetting {
     DenserNearTip,
 }
 
+/// Which mesh edges get fins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FinSelectionSetting {
+    /// The true outline: edges between a face turned to the eye and one turned away, and border
+    /// edges; each fin's opacity is how squarely it faces the eye
+    /// ([`crate::mesh::fins::outline_edges`], [`crate::mesh::fins::fin_facing`]).
+    #[default]
+    Outline,
+    /// The thesis (3.1.2.2): edges whose angle between eye vector and normal lies in
+    /// `fin_windows`, faded towards the windows' ends.
+    AngleWindows,
+}
+
 /// `[fur]`: names follow the thesis (chapter 4.1).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -276,7 +290,10 @@ pub struct FurSettings {
     pub gaussian_sigma: f32,
     /// Whether fins are drawn at silhouettes.
     pub fins: bool,
-    /// Angle windows, degrees, between eye vector and normal where fins are drawn.
+    /// Which edges get fins: the outline (default) or the thesis's angle windows.
+    pub fin_selection: FinSelectionSetting,
+    /// Angle windows, degrees, between eye vector and normal where fins are drawn (with
+    /// `fin_selection = "angle_windows"`).
     pub fin_windows: Vec<[f32; 2]>,
     /// Fin strands are this much taller than shell strands.
     pub fin_height_scale: f32,
@@ -304,6 +321,7 @@ impl Default for FurSettings {
             supersample: 2,
             gaussian_sigma: 0.6,
             fins: true,
+            fin_selection: FinSelectionSetting::Outline,
             fin_windows: vec![[70.0, 110.0], [160.0, 200.0]],
             fin_height_scale: 1.2,
         }

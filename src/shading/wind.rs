@@ -400,10 +400,21 @@ mod tests {
             let pull = vertex_pull(d, n);
             let sideways = d - pull;
             let (n64, side64, pull64) = (n.as_dvec3(), sideways.as_dvec3(), pull.as_dvec3());
-            assert!(side64.dot(n64).abs() < 1e-5, "sideways part has no normal part");
-            assert!(pull64.cross(n64).length() < 1e-5, "the pull is along the normal");
+            assert!(
+                side64.dot(n64).abs() < 1e-5,
+                "sideways part has no normal part"
+            );
+            assert!(
+                pull64.cross(n64).length() < 1e-5,
+                "the pull is along the normal"
+            );
             let tip = side64 + n64 * f64::from(h) + pull64;
-            assert_close(tip.length() as f32, h, 1e-5 * (1.0 + h), "strand length kept");
+            assert_close(
+                tip.length() as f32,
+                f64::from(h),
+                1e-5 * (1.0 + f64::from(h)),
+                "strand length kept",
+            );
         }
         assert_eq!(vertex_pull(Vec3::ONE, Vec3::ZERO), Vec3::ZERO);
     }

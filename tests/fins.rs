@@ -1,0 +1,254 @@
+//! Fins add fur at the silhouette and nothing elsewhere (thesis 3.1.2.2): measured on the scenes
+//! with fins, against the same scenes with `fins = false`.
+
+mod common;
+
+use glam::{Vec2, Vec3};
+use pelage::camera::Camera;
+use pelage::mesh::{self, Mesh};
+use pelage::render::{PreparedScene, RenderedImage};
+use pelage::scene::{FinSelectionSetting, Scene};
+
+/// A scene's image with and without fins.
+struct FinRenders {
+    scene: Scene,
+    prepared: PreparedScene,
+    with_fins: RenderedImage,
+    without_fins: RenderedImage,
+}
+
+fn renders_scene(name: &str) -> Scene {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(format!("{name}.toml"));
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn renders(name: &str, selection: FinSelectionSetting) -> FinRenders {
+    let mut scene = renders_scene(name);
+    scene.fur.fin_selection = selection;
+    assert!(scene.fur.fins, "{name} has fins");
+    let prepared = PreparedScene::new(&scene).expect("prepares");
+    let with_fins = prepared.render(64).expect("renders");
+    let mut bare = scene.clone();
+    bare.fur.fins = false;
+    let without_fins = PreparedScene::new(&bare)
+        .expect("prepares")
+        .render(64)
+        .expect("renders");
+    FinRenders {
+        scene,
+        prepared,
+        with_fins,
+        without_fins,
+    }
+}
+
+/// A projected outline segment of the outermost shell, with the fur's height on screen there.
+struct OutlineSegment {
+    a: Vec2,
+    b: Vec2,
+    fur_pixels: f32,
+}
+
+/// The outline (edges between a face turned to the eye and one turned away, and borders) of the
+/// outermost shell, projected to pixels.
+fn outer_shell_outline(r: &FinRenders) -> Vec<OutlineSegment> {
+    let s = &r.scene;
+    let skin: &Mesh = r.prepared.mesh();
+    let top = *r.prepared.shell_offsets().last().expect("shells");
+    let positions: Vec<Vec3> = skin
+        .vertices
+        .iter()
+        .map(|v| v.position + v.normal * top)
+        .collect();
+    let uvs: Vec<Vec2> = skin.vertices.iter().map(|v| v.uv).collect();
+    let outer = Mesh::from_parts(&positions, &uvs, skin.indices.clone()).expect("outer shell");
+    let edges = mesh::edges(&outer);
+    let camera = Camera {
+        eye: s.camera.eye,
+        target: s.camera.target,
+        up: s.camera.up,
+        fov_y_deg: s.camera.fov_y_deg,
+        near: s.camera.near,
+        far: s.camera.far,
+    };
+    let (w, h) = (s.image.width as f32, s.image.height as f32);
+    let view_proj = camera.view_projection(w / h);
+    let project = |p: Vec3| {
+        let c = view_proj * p.extend(1.0);
+        let ndc = c.truncate() / c.w;
+        Vec2::new((ndc.x * 0.5 + 0.5) * w, (0.5 - ndc.y * 0.5) * h)
+    };
+    mesh::outline_edges(&outer, &edges, s.camera.eye)
+        .into_iter()
+        .map(|k| {
+            let [i, j] = edges[k].vertices.map(|v| v as usize);
+            let fur = |v: usize| {
+                let root = skin.vertices[v].position;
+                let tip = root + skin.vertices[v].normal * s.fur.model_difference;
+                (project(tip) - project(root)).length()
+            };
+            OutlineSegment {
+                a: project(positions[i]),
+                b: project(positions[j]),
+                fur_pixels: fur(i).max(fur(j)),
+            }
+        })
+        .collect()
+}
+
+fn distance_to_segment(p: Vec2, a: Vec2, b: Vec2) -> f32 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).length()
+}
+
+/// Pixel centres (x, y) where the fins changed the image.
+fn changed_pixels(r: &FinRenders) -> Vec<(u32, u32)> {
+    let w = r.with_fins.width;
+    r.with_fins
+        .rgba8
+        .chunks(4)
+        .zip(r.without_fins.rgba8.chunks(4))
+        .enumerate()
+        .filter(|(_, (a, b))| a != b)
+        .map(|(i, _)| (i as u32 % w, i as u32 / w))
+        .collect()
+}
+
+/// How far each changed pixel lies beyond the fur's height (plus 2 px) from the outline; the
+/// worst one.
+fn worst_excess(r: &FinRenders) -> (f32, usize) {
+    let outline = outer_shell_outline(r);
+    let changed = changed_pixels(r);
+    let worst = changed
+        .iter()
+        .map(|&(x, y)| {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            outline
+                .iter()
+                .map(|s| distance_to_segment(p, s.a, s.b) - (s.fur_pixels + 2.0))
+                .fold(f32::INFINITY, f32::min)
+        })
+        .fold(f32::NEG_INFINITY, f32::max);
+    (worst, changed.len())
+}
+
+fn luminance(p: &[u8]) -> f32 {
+    0.2126 * f32::from(p[0]) + 0.7152 * f32::from(p[1]) + 0.0722 * f32::from(p[2])
+}
+
+#[test]
+fn fins_change_only_pixels_near_the_outline() {
+    for name in ["gravity", "torus", "leg"] {
+        let r = renders(name, FinSelectionSetting::Outline);
+        let (worst, changed) = worst_excess(&r);
+        assert!(
+            changed > 200,
+            "{name}: the fins changed only {changed} pixels"
+        );
+        assert!(
+            worst <= 0.0,
+            "{name}: a pixel the fins changed lies {worst:.1} px beyond the fur's height + 2 px \
+             from the outermost shell's outline"
+        );
+        eprintln!("{name}: {changed} pixels changed, worst margin {worst:.1} px");
+    }
+}
+
+/// Per pixel, the colour fur was drawn with and its coverage, recovered from one image over a
+/// black and one over a white background (`c = α·f + (1 − α)·b`): `None` where the coverage is
+/// under `min_alpha`.
+fn unblended(black: &RenderedImage, white: &RenderedImage, min_alpha: f32) -> Vec<Option<f32>> {
+    black
+        .rgba8
+        .chunks(4)
+        .zip(white.rgba8.chunks(4))
+        .map(|(k, w)| {
+            let alpha = 1.0 - (luminance(w) - luminance(k)) / 255.0;
+            (alpha >= min_alpha).then(|| luminance(k) / alpha)
+        })
+        .collect()
+}
+
+#[test]
+fn fin_fur_is_as_bright_as_the_shell_fur_beside_it() {
+    // Where fur lies over the background (the fins' fur beyond the shells, the shells' own
+    // fringe), the fur's colour is recovered from renders over black and over white, so the
+    // comparison does not depend on how much background shows through.
+    for name in ["gravity", "torus", "leg"] {
+        let over = |background: Vec3, fins: bool| {
+            let mut scene = renders_scene(name);
+            scene.image.background = background;
+            scene.fur.fins = fins;
+            PreparedScene::new(&scene)
+                .expect("prepares")
+                .render(64)
+                .expect("renders")
+        };
+        let fins = unblended(&over(Vec3::ZERO, true), &over(Vec3::ONE, true), 0.1);
+        let bare_black = over(Vec3::ZERO, false);
+        let bare_white = over(Vec3::ONE, false);
+        let shells = unblended(&bare_black, &bare_white, 0.1);
+        let shell_alpha: Vec<f32> = bare_black
+            .rgba8
+            .chunks(4)
+            .zip(bare_white.rgba8.chunks(4))
+            .map(|(k, w)| 1.0 - (luminance(w) - luminance(k)) / 255.0)
+            .collect();
+        // A pixel of background in the image without fins: black over black, white over white.
+        let background: Vec<bool> = bare_black
+            .rgba8
+            .chunks(4)
+            .zip(bare_white.rgba8.chunks(4))
+            .map(|(k, w)| k[..3] == [0, 0, 0] && w[..3] == [255, 255, 255])
+            .collect();
+        let mean = |values: Vec<f32>| values.iter().sum::<f32>() / values.len().max(1) as f32;
+        let fin_fur: Vec<f32> = fins
+            .iter()
+            .zip(&background)
+            .filter_map(|(f, &bg)| if bg { *f } else { None })
+            .collect();
+        // The shells' fringe beside the fins: fur through which the background shows (over the
+        // skin the coverage is whole), within 6 px of a pixel of fin fur.
+        let width = bare_black.width as i64;
+        let height = bare_black.height as i64;
+        let mut beside = vec![false; background.len()];
+        for (i, f) in fins.iter().enumerate() {
+            if f.is_none() || !background[i] {
+                continue;
+            }
+            let (x, y) = (i as i64 % width, i as i64 / width);
+            for dy in -6..=6i64 {
+                for dx in -6..=6i64 {
+                    let (u, v) = (x + dx, y + dy);
+                    if (0..width).contains(&u) && (0..height).contains(&v) {
+                        beside[(v * width + u) as usize] = true;
+                    }
+                }
+            }
+        }
+        let shell_fringe: Vec<f32> = shells
+            .iter()
+            .zip(&shell_alpha)
+            .zip(&beside)
+            .filter_map(|((s, &a), &near)| if a < 0.9 && near { *s } else { None })
+            .collect();
+        let (fin_n, shell_n) = (fin_fur.len(), shell_fringe.len());
+        let (fin, shell) = (mean(fin_fur), mean(shell_fringe));
+        eprintln!("{name}: fin fur {fin:.1} ({fin_n} px), shell fur {shell:.1} ({shell_n} px)");
+        assert!(
+            fin_n >= 40 && shell_n >= 400,
+            "{name}: too few pixels to compare"
+        );
+        assert!(
+            (fin / shell - 1.0).abs() <= 0.10,
+            "{name}: fin fur luminance {fin:.1} is not within 10 % of the shell fur's {shell:.1}"
+        );
+    }
+}
