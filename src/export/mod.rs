@@ -31,7 +31,8 @@
 //! layer is not drawn), the level of detail (`frame.level_of_detail`), the shared lean
 //! (`frame.lean`) and the object's path offset (`frame.object_offset`).
 //!
-//! **Meshes.** `fur.gltf` holds one mesh per pass, drawn in this order:
+//! **Meshes.** `fur.gltf` holds one mesh per pass; they are drawn skin, fins, then shells root to
+//! tip (`scene.json`'s `pipeline.pass_order`):
 //! - `skin`: `POSITION`, `NORMAL`, `TANGENT` (xyz = frame T along +u, w = ±1 with
 //!   `B = w·(N × T)`), `TEXCOORD_0` (mesh uv; the fur uv is `uv × texture_repeat`), and the
 //!   application-specific `_BINORMAL` (frame B), `_DPDU`, `_DPDV` (∂p/∂u, ∂p/∂v, unnormalised:
@@ -44,7 +45,8 @@
 //! - `fins`: this frame's silhouette fins (view dependent, chosen on the CPU), with `POSITION`,
 //!   `NORMAL` (the root's vertex normal), `TEXCOORD_0` (fin uv, v = 0 at the root) and the fur
 //!   varyings of the oracle's fragment stage at each corner: `_LIGHT`, `_EYE` (tangent space of
-//!   the fin), `_FADE` (level of detail's fin fade included), `_OBJECT` (the root point, object
+//!   the fin), `_SHADOW` (the self-shadow's lookup offset in fin uv), `_FADE` (level of
+//!   detail's fin fade included), `_OBJECT` (the root point, object
 //!   space), `_MESH_UV` (the root's mesh uv, where the maps are read), `_LENGTH` (the length
 //!   map at the root; 1 at the bottom corners). Fin positions include the object's offset.
 //!
@@ -204,7 +206,11 @@ pub fn export(
                 "colour_texture": colour_file,
                 "tangent_texture": tangent_file,
                 "mip_levels": colour.level_count(),
-                "layer": { "index": prepared.scene().fur.number_of_shells - 1, "shadow_lookups": 0, "height_fraction": 1.0 },
+                "layer": {
+                    "index": prepared.fin_layer_params().index,
+                    "shadow_lookups": prepared.fin_layer_params().lookups,
+                    "height_fraction": prepared.fin_layer_params().height_fraction,
+                },
                 "sampler": { "address_u": "wrap", "address_v": "clamp", "filter": "trilinear" },
             })
         }
@@ -444,6 +450,7 @@ fn scene_json(
         "pipeline": {
             "clear_colour": s.image.background.extend(1.0),
             "clear_depth": 1.0,
+            "pass_order": ["skin", "fins", "shells"],
             "skin": { "depth_compare": "less", "depth_write": true, "blend": "replace", "cull": "back" },
             "shells": { "depth_compare": "less_equal", "depth_write": false, "blend": "alpha", "cull": "back", "order": "root to tip" },
             "fins": { "depth_compare": "less_equal", "depth_write": false, "blend": "alpha", "cull": "none" },
@@ -587,6 +594,7 @@ fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
         let uv = b.vec2s(fin_vertices.iter().map(|(_, f)| f.uv));
         let light = b.vec3s(fin_vertices.iter().map(|(_, f)| f.light), false);
         let eye = b.vec3s(fin_vertices.iter().map(|(_, f)| f.eye), false);
+        let shadow = b.vec2s(fin_vertices.iter().map(|(_, f)| f.shadow));
         let fade: Vec<f32> = fin_vertices.iter().map(|(_, f)| f.fade).collect();
         let fade = b.floats(&fade, 1, false);
         let object = b.vec3s(fin_vertices.iter().map(|(_, f)| f.object), false);
@@ -597,8 +605,8 @@ fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
         meshes.push(json!({ "name": "fins", "primitives": [{
             "attributes": {
                 "POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv,
-                "_LIGHT": light, "_EYE": eye, "_FADE": fade, "_OBJECT": object,
-                "_MESH_UV": mesh_uv, "_LENGTH": length,
+                "_LIGHT": light, "_EYE": eye, "_SHADOW": shadow, "_FADE": fade,
+                "_OBJECT": object, "_MESH_UV": mesh_uv, "_LENGTH": length,
             },
             "indices": indices, "mode": 4,
         }]}));

@@ -599,19 +599,21 @@ impl GpuContext {
             pass.set_pipeline(&skin_pipeline);
             pass.set_bind_group(1, &skin_group, &[]);
             pass.draw_indexed(0..mesh_index_count, 0, 0..1);
-            // Shells, root to tip (thesis 3.1.4).
-            pass.set_pipeline(&shell_pipeline);
-            for group in &shell_groups {
-                pass.set_bind_group(1, group, &[]);
-                pass.draw_indexed(0..mesh_index_count, 0, 0..1);
-            }
-            // Fins at the silhouette.
+            // Fins at the silhouette, before the shells (as the oracle draws them).
             if let Some((vertices, indices, count, group)) = &fin {
                 pass.set_pipeline(&fin_pipeline);
                 pass.set_bind_group(1, group, &[]);
                 pass.set_vertex_buffer(0, vertices.slice(..));
                 pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..*count, 0, 0..1);
+                pass.set_vertex_buffer(0, mesh_buffer.slice(..));
+                pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            }
+            // Shells, root to tip (thesis 3.1.4).
+            pass.set_pipeline(&shell_pipeline);
+            for group in &shell_groups {
+                pass.set_bind_group(1, group, &[]);
+                pass.draw_indexed(0..mesh_index_count, 0, 0..1);
             }
         }
         let texel_bytes = if self.target_format == wgpu::TextureFormat::Rgba32Float {
