@@ -31,6 +31,7 @@
 
 mod bake;
 mod cone;
+mod diagram;
 mod fin;
 mod image;
 mod params;
@@ -39,6 +40,10 @@ mod strand;
 pub use bake::{
     ShellLayer, ShellTextures, bake_shells, bake_shells_with_density, gaussian_layer_weight,
     layer_mid_height,
+};
+pub use diagram::{
+    DIAGRAM_HEIGHT, DIAGRAM_SHELLS, DIAGRAM_WIDTH, DiagramOptions, Figure, MAX_DIAGRAM_RESOLUTION,
+    draw_diagram,
 };
 pub use fin::{FinTexture, bake_fin, bake_fin_strands};
 pub use image::{
