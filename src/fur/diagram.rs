@@ -98,7 +98,7 @@ impl Figure {
         }
     }
 
-    /// The thesis's caption (upper case, as the bitmap font draws it).
+    /// The thesis's caption, shortened where it is long (the bitmap font draws it in capitals).
     pub fn caption(self) -> &'static str {
         match self {
             Figure::Strand => "A strand produced by a Bezier curve",
