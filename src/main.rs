@@ -12,6 +12,7 @@ use clap::{Parser, Subcommand};
 use cli::CommonArgs;
 use cli::bench::BenchArgs;
 use cli::compare::CompareArgs;
+use cli::diagram::DiagramArgs;
 use cli::export::ExportArgs;
 use cli::render::RenderArgs;
 use cli::sweep::{MergeArgs, SweepArgs};
@@ -46,6 +47,9 @@ enum Command {
     Export(ExportArgs),
     /// Show a scene in a window, moving: orbit, toggle effects, tune the fur (h: keys).
     View(ViewArgs),
+    /// Draw the thesis's strand figures 3.2–3.7 (strand, cones, thickness, slope, shells,
+    /// inner and outer part) from the real fur code.
+    Diagram(DiagramArgs),
 }
 
 /// Exit status of an internal error (a panic: a bug in pelage, never bad input).
@@ -88,6 +92,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare::run(args),
         Command::Export(args) => cli::export::run(args),
         Command::View(args) => cli::view::run(args),
+        Command::Diagram(args) => cli::diagram::run(args),
     }));
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

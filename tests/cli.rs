@@ -179,3 +179,92 @@ fn bench_reports_json() {
         assert!(text.contains(key), "{key} missing from {text}");
     }
 }
+
+#[test]
+fn diagram_draws_every_figure_the_same_every_time() {
+    let dir = scratch("diagram");
+    let all = dir.join("all");
+    let o = pelage(&["diagram", "--all", "-o", all.to_str().expect("path")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for n in 2..=7 {
+        let file = all.join(format!("fig-3-{n}.png"));
+        let img = image::open(&file).expect("decodes").to_rgba8();
+        assert_eq!(
+            (img.width(), img.height()),
+            (960, 540),
+            "{}",
+            file.display()
+        );
+    }
+    let one = dir.join("one.png");
+    for _ in 0..2 {
+        let o = pelage(&[
+            "diagram",
+            "--figure",
+            "3.4",
+            "-o",
+            one.to_str().expect("path"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            std::fs::read(&one).expect("png"),
+            std::fs::read(all.join("fig-3-4.png")).expect("png"),
+            "--figure 3.4 and --all differ, or two runs differ"
+        );
+    }
+    // The options change the strand and its cones.
+    let coarse = dir.join("coarse.png");
+    let o = pelage(&[
+        "diagram",
+        "--figure",
+        "fig-3-3",
+        "--circle-resolution",
+        "4",
+        "--strand-resolution",
+        "3",
+        "--seed",
+        "7",
+        "-o",
+        coarse.to_str().expect("path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(
+        std::fs::read(&coarse).expect("png"),
+        std::fs::read(all.join("fig-3-3.png")).expect("png")
+    );
+}
+
+#[test]
+fn diagram_refuses_bad_figures_and_resolutions() {
+    let out = scratch("diagram-bad").join("x.png");
+    let o = out.to_str().expect("utf-8 path");
+    refused(&["diagram", "--figure", "3.9", "-o", o], "3.9");
+    refused(&["diagram", "--figure", "torus", "-o", o], "torus");
+    refused(&["diagram", "-o", o], "--figure");
+    refused(&["diagram", "--figure", "3.2", "--all", "-o", o], "--all");
+    refused(
+        &[
+            "diagram",
+            "--figure",
+            "3.3",
+            "--circle-resolution",
+            "2",
+            "-o",
+            o,
+        ],
+        "--circle-resolution",
+    );
+    refused(
+        &[
+            "diagram",
+            "--figure",
+            "3.3",
+            "--strand-resolution",
+            "100000",
+            "-o",
+            o,
+        ],
+        "--strand-resolution",
+    );
+    assert!(!out.exists(), "nothing is written for refused input");
+}

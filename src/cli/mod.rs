@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 pub mod bench;
 pub mod compare;
+pub mod diagram;
 pub mod export;
 pub mod gpu_render;
 pub mod render;

@@ -139,7 +139,7 @@ fn bake(
 /// The part `[lo, hi]` (segment parameters) of a segment inside heights `[z0, z1]`, if it has
 /// positive length (or is a horizontal segment at a height in `[z0, z1)`, `[z0, z1]` for the
 /// last layer).
-fn clip_to_slab(c: &ConeSegment, z0: f32, z1: f32, last: bool) -> Option<(f32, f32)> {
+pub(crate) fn clip_to_slab(c: &ConeSegment, z0: f32, z1: f32, last: bool) -> Option<(f32, f32)> {
     let (za, zb) = (c.p0.z, c.p1.z);
     let dz = zb - za;
     if dz == 0.0 {

@@ -3,6 +3,7 @@
 //! The data path: [`FurParams`] → [`generate_strands`] (MT19937 from an explicit seed, one block
 //! of draws per strand) → cones around each sampled Bézier segment → [`bake_shells`] (one
 //! texture pair per shell layer, periodic tile) and [`bake_fin`] (a side view of a narrow strip).
+//! [`draw_diagram`] draws the thesis's strand figures 3.2–3.7 from this same code.
 //!
 //! Units: the shell tile is the periodic unit square `x, y ∈ [0, 1)`; heights and radii are in
 //! the same unit. Tangent space: `x` = texture `u`, `y` = texture `v`, `z` = up. Images are
@@ -31,6 +32,7 @@
 
 mod bake;
 mod cone;
+mod diagram;
 mod fin;
 mod image;
 mod params;
@@ -39,6 +41,10 @@ mod strand;
 pub use bake::{
     ShellLayer, ShellTextures, bake_shells, bake_shells_with_density, gaussian_layer_weight,
     layer_mid_height,
+};
+pub use diagram::{
+    DIAGRAM_HEIGHT, DIAGRAM_SHELLS, DIAGRAM_WIDTH, DiagramOptions, Figure, MAX_DIAGRAM_RESOLUTION,
+    draw_diagram,
 };
 pub use fin::{FinTexture, bake_fin, bake_fin_strands};
 pub use image::{
