@@ -97,10 +97,11 @@ fn bad_scenes_name_file_line_and_key() {
         &["render", zero.to_str().expect("path")],
         "zero.toml:3: fur.number_of_shells = 0",
     );
-    let negative = write(&dir, "negative.toml", "[fur]\nmodel_difference = -0.5\n");
+    // Negative thins the object (figure 3.10); zero is no fur at all.
+    let flat = write(&dir, "flat.toml", "[fur]\nmodel_difference = 0.0\n");
     refused(
-        &["render", negative.to_str().expect("path")],
-        "negative.toml:2: fur.model_difference",
+        &["render", flat.to_str().expect("path")],
+        "flat.toml:2: fur.model_difference",
     );
     let unknown = write(&dir, "unknown.toml", "[camera]\nfov = 30\n");
     refused(

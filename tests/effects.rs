@@ -224,3 +224,31 @@ fn wind_and_gravity_move_a_single_strand_once() {
         );
     }
 }
+
+#[test]
+fn a_negative_model_difference_thins_the_object_inside_its_surface() {
+    // Thesis figure 3.10: the same fur, grown from the surface moved inward, ends where the
+    // thickened fur starts: the thinned object's outermost shell is the thickened one's skin.
+    let thick = scene("gravity", 160, 120);
+    let mut thin = thick.clone();
+    thin.fur.model_difference = -thick.fur.model_difference;
+    let thick = PreparedScene::new(&thick).expect("prepares");
+    let thin = PreparedScene::new(&thin).expect("prepares");
+    let d = thick.scene().fur.model_difference;
+    for (a, b) in thick.mesh().vertices.iter().zip(&thin.mesh().vertices) {
+        let moved = b.position - a.position;
+        assert!(
+            (moved + a.normal * d).length() < 1e-5,
+            "skin moved inward by |d|"
+        );
+    }
+    assert_eq!(thick.shell_offsets(), thin.shell_offsets());
+    // The thinned object covers less of the image than the thickened one.
+    let covered = |p: &PreparedScene| {
+        let image = p.render(64).expect("renders");
+        let bg = p.scene().image.background;
+        let bg = [bg.x, bg.y, bg.z].map(|c| (c * 255.0).round() as u8);
+        image.rgba8.chunks(4).filter(|px| px[..3] != bg).count()
+    };
+    assert!(covered(&thin) < covered(&thick));
+}

@@ -283,6 +283,8 @@ pub fn scene_values(s: &Scene) -> Value {
             "number_of_shells": s.fur.number_of_shells,
             "texture_resolution": s.fur.texture_resolution,
             "model_difference": s.fur.model_difference,
+            "fur_length": s.fur.fur_length(),
+            "skin_inset": s.fur.skin_inset(),
             "shell_spacing": debug_name(s.fur.shell_spacing),
             "texture_repeat": s.fur.texture_repeat,
             "colour": s.fur.colour,

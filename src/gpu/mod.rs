@@ -915,7 +915,7 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
         Vec4::new(
             s.fur.texture_repeat[0],
             s.fur.texture_repeat[1],
-            s.fur.model_difference,
+            s.fur.fur_length(),
             if wind.is_some() { 1.0 } else { 0.0 },
         ),
         Vec4::new(

@@ -294,6 +294,20 @@ fn tile_world_size(mesh: &Mesh, repeat: [f32; 2]) -> Vec2 {
     )
 }
 
+/// The object thinned (thesis 3.1.4, figure 3.10: "it thickens or thins the object"): every
+/// vertex moved `inset` (≤ 0) along its vertex normal, so that fur of length `|inset|` grown from
+/// there reaches the original surface. Normals, frames and uvs are unchanged; `dpdu`/`dpdv` are
+/// kept too (the inset of a smooth surface changes them by a factor 1 − κ·|inset| that the
+/// shading's projections do not need). No change for `inset = 0`.
+fn inset(mut mesh: Mesh, inset: f32) -> Mesh {
+    if inset != 0.0 {
+        for v in &mut mesh.vertices {
+            v.position += v.normal * inset;
+        }
+    }
+    mesh
+}
+
 /// Scales positions and the surface derivatives; normals and frames are unchanged.
 fn scaled(mut mesh: Mesh, scale: f32) -> Mesh {
     for v in &mut mesh.vertices {
@@ -325,7 +339,7 @@ fn build_mesh(scene: &Scene) -> Result<(Mesh, Vec<String>), RenderError> {
 fn fur_params(scene: &Scene, tile: Vec2) -> FurParams {
     let f = &scene.fur;
     let tile_width = tile.x.max(tile.y);
-    let max_height = f.model_difference / tile_width;
+    let max_height = f.fur_length() / tile_width;
     FurParams {
         number_of_strands: f.number_of_strands,
         strand_resolution: f.strand_resolution,
@@ -353,6 +367,7 @@ impl PreparedScene {
     pub fn new(scene: &Scene) -> Result<Self, RenderError> {
         crate::raster::framebuffer::check_size(scene.image.width, scene.image.height)?;
         let (mesh, warnings) = build_mesh(scene)?;
+        let mesh = inset(mesh, scene.fur.skin_inset());
         let tile = tile_world_size(&mesh, scene.fur.texture_repeat);
         let params = fur_params(scene, tile);
         let maps = SurfaceMaps::load(&scene.maps, &scene.base_dir)?;
@@ -378,12 +393,12 @@ impl PreparedScene {
         };
         let n = scene.fur.number_of_shells;
         let shell_offsets = (0..n)
-            .map(|i| mesh::shells::shell_offset(i, n, scene.fur.model_difference, spacing))
+            .map(|i| mesh::shells::shell_offset(i, n, scene.fur.fur_length(), spacing))
             .collect();
         let (fin, fin_height) = if scene.fur.fins {
             let baked_fin = fur::bake_fin(&params, scene.seed)?;
-            let height = scene.fur.model_difference * baked_fin.max_height
-                / baked.max_height.max(f32::EPSILON);
+            let height =
+                scene.fur.fur_length() * baked_fin.max_height / baked.max_height.max(f32::EPSILON);
             (
                 Some(LayerTextures::new(&baked_fin.colour, &baked_fin.tangent)?),
                 height,
@@ -561,7 +576,7 @@ impl PreparedScene {
             )?;
         }
 
-        let difference = s.fur.model_difference;
+        let difference = s.fur.fur_length();
         let eye = camera.eye;
         for (i, textures) in self.shells.iter().enumerate() {
             let lod_span = lod.as_ref().map_or(1.0, |l| l.spans[i]);
@@ -671,7 +686,7 @@ impl PreparedScene {
         // largest on screen, and it must keep its look.
         let distance = (s.camera.eye - (centre + moved)).length() - radius;
         let fur_pixels = crate::shading::lod_fur_pixels(
-            s.fur.model_difference,
+            s.fur.fur_length(),
             distance,
             s.camera.fov_y_deg,
             s.image.height,

@@ -263,6 +263,8 @@ pub struct FurSettings {
     /// Texels per side of a shell texture (`textureResolution`, base 128).
     pub texture_resolution: u32,
     /// Distance from the skin to the outermost shell, world units (`modelDifference`, base 1.0).
+    /// Negative *thins* the object (thesis figure 3.10): the skin is moved inward along the vertex
+    /// normals by the magnitude and the fur grows from there up to the original surface.
     pub model_difference: f32,
     /// Shell spacing.
     pub shell_spacing: ShellSpacingSetting,
@@ -297,6 +299,19 @@ pub struct FurSettings {
     pub fin_windows: Vec<[f32; 2]>,
     /// Fin strands are this much taller than shell strands.
     pub fin_height_scale: f32,
+}
+
+impl FurSettings {
+    /// The fur's length, world units: the magnitude of `model_difference`.
+    pub fn fur_length(&self) -> f32 {
+        self.model_difference.abs()
+    }
+
+    /// How far the skin is moved along its vertex normals before the fur grows from it:
+    /// `model_difference` when negative (the object thinned), else 0.
+    pub fn skin_inset(&self) -> f32 {
+        self.model_difference.min(0.0)
+    }
 }
 
 impl Default for FurSettings {

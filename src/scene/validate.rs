@@ -190,13 +190,23 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
             format!("fur.texture_resolution × fur.supersample = {baked} exceeds 8192"),
         ));
     }
-    positive("fur.model_difference", f.model_difference)?;
+    // Negative thins the object (thesis figure 3.10): the fur lies inside the surface.
     range_f32(
         "fur.model_difference",
-        f.model_difference,
+        f.model_difference.abs(),
         MIN_SIZE,
         MAX_SIZE,
-    )?;
+    )
+    .map_err(|_| {
+        (
+            "fur.model_difference".to_string(),
+            format!(
+                "fur.model_difference = {} must be a number whose size is within {MIN_SIZE}..={MAX_SIZE} \
+                 (negative thins the object)",
+                f.model_difference
+            ),
+        )
+    })?;
     for (k, v) in f.texture_repeat.iter().enumerate() {
         range_f32(&format!("fur.texture_repeat[{k}]"), *v, 0.001, 10_000.0)?;
     }
@@ -548,7 +558,11 @@ mod tests {
                 .starts_with("test.toml:4: fur.number_of_shells = 0"),
             "{err}"
         );
-        let err = parse("[fur]\nmodel_difference = -1.0\n").unwrap_err();
+        assert!(
+            parse("[fur]\nmodel_difference = -1.0\n").is_ok(),
+            "negative thins"
+        );
+        let err = parse("[fur]\nmodel_difference = 0.0\n").unwrap_err();
         assert!(err.to_string().contains("fur.model_difference"), "{err}");
         let err = parse("[image]\nwidth = 100000\n").unwrap_err();
         assert_eq!(err.line, Some(2));

@@ -376,7 +376,7 @@ mod tests {
         for (arg, needle) in [
             ("number_of_shells=0", "number_of_shells"),
             ("fur.no_such_key=1", "no_such_key"),
-            ("number_of_spots=3", "number_of_spots"),
+            ("number_of_spots=13", "number_of_spots"),
             ("camera_distance=-1", "camera_distance"),
             ("lod=maybe", "lod"),
             ("texture_resolution=abc", "texture_resolution"),
