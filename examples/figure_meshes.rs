@@ -720,8 +720,8 @@ pub fn bull() -> ObjMesh {
         );
         mesh.append(horn);
     }
-    // Tail: from the top of the rump, arching back and hanging down a little to the left (+z,
-    // so the three-quarter view sees it past the rump), ending in a tuft.
+    // Tail: from the top of the rump, arching back and hanging down a little to the bull's
+    // right (+z, the side scenes/bull.toml sees, so the tuft shows past the rump).
     let tail = tube(
         [
             v3(-0.95, 1.3, 0.0),
