@@ -33,12 +33,6 @@ fn scenes() -> Vec<PathBuf> {
         .expect("scenes/")
         .map(|e| e.expect("entry").path())
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .filter(|p| {
-            let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned());
-            !common::AWAITING_SUPPORT
-                .iter()
-                .any(|(name, _)| stem.as_deref() == Some(*name))
-        })
         .collect();
     files.sort();
     files

@@ -814,19 +814,12 @@ mod serialise_tests {
         Scene::parse(&text, "round-trip", &scene.base_dir).unwrap_or_else(|e| panic!("{e}\n{text}"))
     }
 
-    /// Scene files this validator refuses until support lands (the list of
-    /// `tests/common/mod.rs`, `AWAITING_SUPPORT`, whose golden test checks they still fail).
-    const AWAITING_SUPPORT: &[&str] = &["face-thinned.toml"];
-
     #[test]
     fn every_scene_file_round_trips() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
         for entry in std::fs::read_dir(&dir).expect("scenes/") {
             let path = entry.expect("entry").path();
-            let awaiting = path
-                .file_name()
-                .is_some_and(|n| AWAITING_SUPPORT.iter().any(|a| n == *a));
-            if path.extension().is_some_and(|e| e == "toml") && !awaiting {
+            if path.extension().is_some_and(|e| e == "toml") {
                 let scene = Scene::load(&path).expect("load");
                 assert_eq!(round_trip(&scene), scene, "{}", path.display());
             }

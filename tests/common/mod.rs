@@ -33,12 +33,3 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
 }
-
-/// Scenes in `scenes/` that this build's validator refuses, each with the reason: they have no
-/// golden test and the GPU comparison (and the round trip of `src/scene/mod.rs`, which keeps
-/// its own copy of the names) skip them until support lands. `tests/golden.rs` checks that each
-/// is still refused, so an entry cannot outlive its reason.
-pub const AWAITING_SUPPORT: &[(&str, &str)] = &[(
-    "face-thinned",
-    "negative fur.model_difference (thesis figure 3.10, thinning) is not accepted yet",
-)];
