@@ -227,7 +227,7 @@ impl LightingBases {
 /// The thesis (3.2.3, after eq. 3.5): "The new specular term is the **sum** of the three
 /// specular values, having three different tangent values" ([`SpecularLobes::Sum`]). The same
 /// section, after eq. 3.7, gives the range of every term as "Ambient, diffuse, specularly all
-/// ranges from [0,1]", which only the mean keeps ([`SpecularLobes::Average`]). Scene key
+/// ranges from \[0,1\]", which only the mean keeps ([`SpecularLobes::Average`]). Scene key
 /// `shading.specular_lobes`; the default is [`SpecularLobes::Average`]: see
 /// [`three_lobe_specular`] for why.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

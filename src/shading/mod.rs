@@ -51,6 +51,14 @@
 //! - Lobe bases and weights are saturated to `[0, 1]` with NaN → 0.
 //! - Rings (spots, stripes) use the Hermite smoothstep of the linear ring coordinate.
 //! - Eq. 3.7 clamps each channel to `[0, 1]`; a NaN channel becomes 0.
+//! - Four departures from the thesis's words are scene keys, both forms here, defaults with
+//!   their reasons in the docs of each (and the README, "Where pelage departs from the
+//!   thesis"): the three lobes of eq. 3.5 averaged or summed ([`SpecularLobes`], default the
+//!   mean); `ψ_ambient` times the strand colour or alone ([`AmbientTerm`], default times the
+//!   strand colour); a shadow lookup adding its alpha or 1 when the texel is not transparent,
+//!   alpha ≥ [`SHADOW_OPAQUE_ALPHA`] ([`ShadowTexel`], default the alpha); stripes as bands of
+//!   the lobe of a light fixed to the object ([`light_stripe_intensity`], the default, the
+//!   thesis's) or across an axis ([`stripe_intensity`]).
 //!
 //! # How the tests check the numbers
 //! Each term is compared with an f64 reimplementation written separately in its test (sines
