@@ -70,7 +70,10 @@ fn shading_terms(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("shading");
     group.throughput(Throughput::Elements(inputs.len() as u64));
-    for tangents in [SpecularTangents::One, SpecularTangents::Three] {
+    for tangents in [
+        SpecularTangents::One,
+        SpecularTangents::Three(shading::SpecularLobes::Sum),
+    ] {
         group.bench_with_input(
             BenchmarkId::new("strand_lighting", format!("{tangents:?}")),
             &tangents,
@@ -123,6 +126,7 @@ fn shading_terms(c: &mut Criterion) {
                         Vec2::new(t.x, t.y),
                         Vec2::new(0.01, 0.02),
                         6,
+                        shading::ShadowTexel::Opaque,
                     )
                 })
                 .sum::<f32>()

@@ -171,6 +171,40 @@ fn every_scene_matches_the_oracle_within_tolerance() {
     );
 }
 
+#[test]
+fn the_thesis_conventions_match_the_oracle_within_tolerance() {
+    // The scenes above use the defaults; here the other choice of each convention key (README,
+    // "Where pelage departs from the thesis"): the three lobes summed, the ambient outside the
+    // strand colour, opaque shadow lookups counted, and the stripes of both kinds.
+    let context = context();
+    let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
+    let (mut scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cow.toml"));
+    scene.shading.specular_tangents = 3;
+    scene.shading.specular_lobes = pelage::scene::SpecularLobesSetting::Sum;
+    scene.shading.weights.specular = 0.2;
+    scene.shading.ambient_term = pelage::scene::AmbientTermSetting::Constant;
+    scene.shading.shadow_texel = pelage::scene::ShadowTexelSetting::Opaque;
+    scene.stripes.push(pelage::scene::StripeSettings {
+        kind: pelage::scene::StripeKind::Axis,
+        axis: Some(glam::Vec3::new(0.2, 0.0, 1.0)),
+        period: Some(7.0),
+        width: Some(0.9),
+        softness: Some(0.4),
+        ..pelage::scene::StripeSettings::default()
+    });
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    let c = compare(
+        &context,
+        &prepared,
+        scene.time,
+        &GpuOptions::default(),
+        &tolerance,
+        "thesis-conventions",
+    );
+    println!("{}", row("thesis choices", &c));
+    assert!(c.passed(), "outside tolerance: {}", c.failures.join("; "));
+}
+
 /// Replaces `from` (which must occur exactly once) in the shader.
 fn perturbed(from: &str, to: &str) -> GpuOptions {
     assert_eq!(

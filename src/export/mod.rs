@@ -307,6 +307,9 @@ pub fn scene_values(s: &Scene) -> Value {
             "specular_exponent": s.shading.specular_exponent,
             "dampened_exponent": s.shading.dampened_exponent,
             "specular_tangents": s.shading.specular_tangents,
+            "specular_lobes": debug_name(s.shading.specular_lobes),
+            "ambient_term": debug_name(s.shading.ambient_term),
+            "shadow_texel": debug_name(s.shading.shadow_texel),
             "tangent_shift": s.shading.tangent_shift,
             "shadow_divisor": s.shading.shadow_divisor,
             "weights": {
@@ -323,8 +326,9 @@ pub fn scene_values(s: &Scene) -> Value {
             "inner_threshold": p.inner_threshold, "outer_threshold": p.outer_threshold,
         })).collect::<Vec<_>>(),
         "stripes": s.stripes.iter().map(|p| json!({
-            "colour": p.colour, "axis": p.axis, "period": p.period, "width": p.width,
-            "softness": p.softness,
+            "kind": debug_name(p.kind), "colour": p.colour, "axis": p.axis(),
+            "direction": p.direction(), "exponent": p.exponent(), "period": p.period(),
+            "width": p.width(), "softness": p.softness(),
         })).collect::<Vec<_>>(),
         "wind": s.wind.as_ref().map(|w| json!({
             "direction": w.direction, "strength": w.strength, "frequency": w.frequency,
@@ -374,6 +378,18 @@ fn spot_json(spot: &Spot) -> Value {
         } => json!({
             "kind": "light", "direction_unit": direction, "exponent": exponent,
             "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
+        }),
+        Spot::LightStripe {
+            direction,
+            exponent,
+            period,
+            width,
+            softness,
+            colour,
+            ..
+        } => json!({
+            "kind": "light_stripe", "direction_unit": direction, "exponent": exponent,
+            "period": period, "width": width, "softness": softness, "colour": colour,
         }),
         Spot::Stripe {
             axis,

@@ -19,7 +19,8 @@ struct FrameUniforms {
     shading: vec4<f32>,        // ambient, banks_exponent, specular_exponent, dampened_exponent
     shading2: vec4<f32>,       // tangent_shift, wind_tangent_fraction, burn exponent, 1 when burning
     weights: vec4<f32>,        // eq. 3.7 weights: ambient, diffuse, specular, dampened
-    weights2: vec4<f32>,       // x: shadow weight
+    weights2: vec4<f32>,       // x: shadow weight; y, z, w: 1 for SpecularLobes::Sum,
+                               // AmbientTerm::Constant, ShadowTexel::Opaque (else 0)
     counts: vec4<u32>,         // specular tangents (1 or 3), debug view, spots, matches
     offset: vec4<f32>,         // xyz: the object's offset on its path at this instant (0 at rest)
     lean: vec4<f32>,           // xyz: the shared lean (gravity + spring lag, world), w: 1 with a lean
@@ -40,10 +41,10 @@ struct LayerUniforms {
 
 @group(0) @binding(0) var<uniform> frame: FrameUniforms;
 // Spots in application order, four vec4 each:
-// [kind (0 ellipsoid, 1 light, 2 stripe), 0, 0, 0],
-// [centre | direction | axis (xyz), exponent | period (w)],
-// [radii (xyz), inner | inner_threshold | width (w)],
-// [colour (xyz), outer_threshold | softness (w)].
+// [kind (0 ellipsoid, 1 light, 2 stripe, 3 light stripe), 0, 0, 0],
+// [centre | direction | axis | direction (xyz), exponent | period | exponent (w)],
+// [radii | 0 | 0 | (period, 0, 0) (xyz), inner | inner_threshold | width | width (w)],
+// [colour (xyz), outer_threshold | softness | softness (w)].
 @group(0) @binding(1) var<storage, read> spots: array<vec4<f32>>;
 // Unit match directions (3.4), xyz.
 @group(0) @binding(2) var<storage, read> matches: array<vec4<f32>>;
@@ -161,7 +162,16 @@ fn shift_tangent(tangent: vec3<f32>, normal: vec3<f32>, shift: f32) -> vec3<f32>
     return normalize_or_zero(tangent + shift * normal);
 }
 
-// One tangent, or the mean of three (t, shifted up, shifted down), eq. 3.5.
+// three_lobe_specular: the thesis's sum of the three lobes, or their mean (eq. 3.5).
+fn three_lobe_specular(centre: f32, up: f32, down: f32) -> f32 {
+    let sum = centre + up + down;
+    if (frame.weights2.y != 0.0) {
+        return sum;
+    }
+    return sum / 3.0;
+}
+
+// One tangent, or three (t, shifted up, shifted down) combined by three_lobe_specular, eq. 3.5.
 fn specular_with_tangents(tangent: vec3<f32>, normal: vec3<f32>, light: vec3<f32>, eye: vec3<f32>,
                           exponent: f32, tangents: u32, shift: f32) -> f32 {
     let t = normalize_or_zero(tangent);
@@ -174,7 +184,7 @@ fn specular_with_tangents(tangent: vec3<f32>, normal: vec3<f32>, light: vec3<f32
     let n = normalize_or_zero(normal);
     let up = specular_unit(shift_tangent(t, n, shift), l, e, exponent);
     let down = specular_unit(shift_tangent(t, n, -shift), l, e, exponent);
-    return (centre + up + down) / 3.0;
+    return three_lobe_specular(centre, up, down);
 }
 
 // ---- lighting (3.2.3, eq. 3.7; lighting.rs) ---------------------------------------------
@@ -191,8 +201,9 @@ fn dampened_specular(s: f32) -> f32 {
     return 0.0;
 }
 
-// Eq. 3.7: w_a·ambient·strand + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened
-// − w_sh·shadow, each channel clamped to [0, 1].
+// Eq. 3.7: A + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow,
+// each channel clamped to [0, 1]; A = ambient_term: w_a·ambient alone (eq. 3.7 as printed) or
+// times the strand colour.
 fn final_colour(strand_colour: vec3<f32>, light_colour: vec3<f32>, ambient: f32, diffuse: f32,
                 specular: f32, dampened: f32, shadow: f32) -> vec3<f32> {
     let w = frame.weights;
@@ -203,7 +214,11 @@ fn final_colour(strand_colour: vec3<f32>, light_colour: vec3<f32>, ambient: f32,
     for (var c = 0; c < 3; c++) {
         let s = strand_colour[c];
         let l = light_colour[c];
-        out[c] = saturate01(w.x * ambient * s + s * l * lit + l * highlight - dark);
+        var a = w.x * ambient;
+        if (frame.weights2.z == 0.0) {
+            a = a * s;
+        }
+        out[c] = saturate01(a + s * l * lit + l * highlight - dark);
     }
     return out;
 }
@@ -315,12 +330,24 @@ fn covered_at(uv: vec2<f32>, lod: f32, density: f32) -> f32 {
     return sample_nearest_level(colour_map, uv, lod).a;
 }
 
-// shell_shadow: Σ_{k=1..m} saturate(covered(uv + step·(k/m))).
+// SHADOW_OPAQUE_ALPHA: a texel is transparent below half the smallest non-zero 8-bit alpha.
+const SHADOW_OPAQUE_ALPHA: f32 = 0.5 / 255.0;
+
+// shadow_texel: 1 for a texel that is not transparent (the thesis's count, shadow_of_opaque),
+// or the alpha saturated (shadow_of_alpha).
+fn shadow_texel(alpha: f32) -> f32 {
+    if (frame.weights2.w != 0.0) {
+        return select(0.0, 1.0, alpha >= SHADOW_OPAQUE_ALPHA);
+    }
+    return saturate01(alpha);
+}
+
+// shell_shadow: Σ_{k=1..m} shadow_texel(covered(uv + step·(k/m))).
 fn shell_shadow(uv: vec2<f32>, shadow_lookup: vec2<f32>, lookups: u32, lod: f32, density: f32) -> f32 {
     let m = f32(lookups);
     var shadow = 0.0;
     for (var k = 1u; k <= lookups; k++) {
-        shadow += saturate01(covered_at(uv + shadow_lookup * (f32(k) / m), lod, density));
+        shadow += shadow_texel(covered_at(uv + shadow_lookup * (f32(k) / m), lod, density));
     }
     return shadow;
 }
@@ -365,6 +392,11 @@ fn stripe_intensity(coordinate: f32, period: f32, width: f32, softness: f32) -> 
     return ramp(-dist, -(half + soft), -half);
 }
 
+// light_stripe_band: bands of the lobe value centred on (k + ½)·period.
+fn light_stripe_band(lobe: f32, period: f32, width: f32, softness: f32) -> f32 {
+    return stripe_intensity(lobe - 0.5 * period, period, width, softness);
+}
+
 // Spot::weight_at, applied in order (apply_spots).
 fn apply_spots(fur_colour: vec3<f32>, object: vec3<f32>, normal: vec3<f32>) -> vec3<f32> {
     var strand = fur_colour;
@@ -379,8 +411,11 @@ fn apply_spots(fur_colour: vec3<f32>, object: vec3<f32>, normal: vec3<f32>) -> v
         } else if (head.x == 1.0) {
             let lobe = light_spot_intensity(normal, a.xyz, a.w);
             weight = spot_gradient(lobe, b.w, c.w);
-        } else {
+        } else if (head.x == 2.0) {
             weight = stripe_intensity(dot(object, a.xyz), a.w, b.w, c.w);
+        } else {
+            let lobe = light_spot_intensity(normal, a.xyz, a.w);
+            weight = light_stripe_band(lobe, b.x, b.w, c.w);
         }
         strand = apply_spot(strand, c.xyz, weight);
     }

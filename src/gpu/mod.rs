@@ -876,6 +876,20 @@ fn spot_vec4s(spot: &Spot) -> [[f32; 4]; 4] {
             Vec3::ZERO.extend(inner_threshold).to_array(),
             colour.extend(outer_threshold).to_array(),
         ],
+        Spot::LightStripe {
+            direction,
+            exponent,
+            period,
+            width,
+            softness,
+            colour,
+            ..
+        } => [
+            [3.0, 0.0, 0.0, 0.0],
+            direction.extend(exponent).to_array(),
+            Vec3::new(period, 0.0, 0.0).extend(width).to_array(),
+            colour.extend(softness).to_array(),
+        ],
         Spot::Stripe {
             axis,
             period,
@@ -931,7 +945,20 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
             burning,
         ),
         Vec4::new(w.ambient, w.diffuse, w.specular, w.dampened),
-        Vec4::new(w.shadow, 0.0, 0.0, 0.0),
+        Vec4::new(
+            w.shadow,
+            // SPECULAR_LOBES_SUM, AMBIENT_CONSTANT, SHADOW_OPAQUE flags in fur.wgsl.
+            f32::from(u8::from(matches!(
+                shade.tangents,
+                crate::shading::SpecularTangents::Three(crate::shading::SpecularLobes::Sum)
+            ))),
+            f32::from(u8::from(
+                shade.ambient_term == crate::shading::AmbientTerm::Constant,
+            )),
+            f32::from(u8::from(
+                shade.shadow_texel == crate::shading::ShadowTexel::Opaque,
+            )),
+        ),
     ];
     let offset = prepared.object_offset_at(time).unwrap_or(Vec3::ZERO);
     let lean = prepared.shared_lean_at(time);
@@ -949,7 +976,7 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
         .collect();
     let tangents: u32 = match shade.tangents {
         crate::shading::SpecularTangents::One => 1,
-        crate::shading::SpecularTangents::Three => 3,
+        crate::shading::SpecularTangents::Three(_) => 3,
     };
     let debug: u32 = match shade.debug_view {
         DebugView::None => 0,

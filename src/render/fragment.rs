@@ -20,13 +20,20 @@
 use super::maps::SurfaceMaps;
 use crate::raster::texture::{NearestLookup, TrilinearPair, level_of_detail};
 use crate::raster::{Fragment, Quad, QuadShader, Sampler, Texture, Varyings};
-use crate::scene::{DebugView, Scene, SpotKind};
-use crate::shading::{self, BurnOutcome, ShadingWeights, SpecularTangents, Vec3x4};
+use crate::scene::{
+    AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
+    StripeKind,
+};
+use crate::shading::{
+    self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
+    Vec3x4,
+};
 use glam::{Vec2, Vec3, Vec4};
 
 /// Alpha below which a fur texel is discarded before any shading (half of the smallest
-/// non-zero 8-bit alpha).
-pub const ALPHA_DISCARD: f32 = 0.5 / 255.0;
+/// non-zero 8-bit alpha). The shell shadow's "transparent" is the same
+/// ([`shading::SHADOW_OPAQUE_ALPHA`]).
+pub const ALPHA_DISCARD: f32 = shading::SHADOW_OPAQUE_ALPHA;
 
 /// What the vertex stage hands the fur fragment stage.
 ///
@@ -109,6 +116,24 @@ pub enum Spot {
         /// Colour.
         colour: Vec3,
     },
+    /// Periodic bands in the lobe of a light fixed to the object
+    /// ([`shading::light_stripe_intensity`]).
+    LightStripe {
+        /// Towards the stripe light, object space.
+        direction: Vec3,
+        /// `direction` normalised once more, as [`shading::light_spot_cosine`] normalises it.
+        cosine_direction: Vec3,
+        /// Lobe exponent.
+        exponent: f32,
+        /// Band spacing, lobe units.
+        period: f32,
+        /// Core width, lobe units.
+        width: f32,
+        /// Blend width, lobe units.
+        softness: f32,
+        /// Colour.
+        colour: Vec3,
+    },
     /// Periodic bands across an axis.
     Stripe {
         /// Unit axis.
@@ -163,6 +188,23 @@ impl Spot {
                 (
                     colour,
                     shading::spot_gradient(lobe, inner_threshold, outer_threshold),
+                )
+            }
+            Spot::LightStripe {
+                cosine_direction,
+                exponent,
+                period,
+                width,
+                softness,
+                colour,
+                ..
+            } => {
+                // `shading::light_stripe_intensity(normal, direction, …)`, both normalisations
+                // done.
+                let lobe = shading::light_spot_lobe(unit_normal.dot(cosine_direction), exponent);
+                (
+                    colour,
+                    shading::light_stripe_band(lobe, period, width, softness),
                 )
             }
             Spot::Stripe {
@@ -251,8 +293,12 @@ pub struct ShadeParams {
     pub ambient: f32,
     /// Exponents of the diffuse, specular and dampened specular terms.
     pub exponents: shading::LightingExponents,
-    /// One or three tangents.
+    /// One or three tangents (and how three combine).
     pub tangents: SpecularTangents,
+    /// Where `ψ_ambient` of eq. 3.7 stands.
+    pub ambient_term: AmbientTerm,
+    /// What each shell-shadow lookup adds.
+    pub shadow_texel: ShadowTexel,
     /// Scheuermann shift.
     pub tangent_shift: f32,
     /// Weights of eq. 3.7.
@@ -313,12 +359,23 @@ impl ShadeParams {
                 },
             })
             .collect();
-        spots.extend(s.stripes.iter().map(|stripe| Spot::Stripe {
-            axis: stripe.axis.normalize_or_zero(),
-            period: stripe.period,
-            width: stripe.width,
-            softness: stripe.softness,
-            colour: stripe.colour,
+        spots.extend(s.stripes.iter().map(|stripe| match stripe.kind {
+            StripeKind::Axis => Spot::Stripe {
+                axis: stripe.axis().normalize_or_zero(),
+                period: stripe.period(),
+                width: stripe.width(),
+                softness: stripe.softness(),
+                colour: stripe.colour,
+            },
+            StripeKind::Light => Spot::LightStripe {
+                direction: stripe.direction().normalize_or_zero(),
+                cosine_direction: stripe.direction().normalize_or_zero().normalize_or_zero(),
+                exponent: stripe.exponent(),
+                period: stripe.period(),
+                width: stripe.width(),
+                softness: stripe.softness(),
+                colour: stripe.colour,
+            },
         }));
         let burn = s.burn.as_ref().and_then(|b| {
             let schedule = shading::BurnSchedule {
@@ -349,9 +406,20 @@ impl ShadeParams {
                 dampened: s.shading.dampened_exponent,
             },
             tangents: if s.shading.specular_tangents == 3 {
-                SpecularTangents::Three
+                SpecularTangents::Three(match s.shading.specular_lobes {
+                    SpecularLobesSetting::Sum => SpecularLobes::Sum,
+                    SpecularLobesSetting::Average => SpecularLobes::Average,
+                })
             } else {
                 SpecularTangents::One
+            },
+            ambient_term: match s.shading.ambient_term {
+                AmbientTermSetting::Constant => AmbientTerm::Constant,
+                AmbientTermSetting::Strand => AmbientTerm::Strand,
+            },
+            shadow_texel: match s.shading.shadow_texel {
+                ShadowTexelSetting::Opaque => ShadowTexel::Opaque,
+                ShadowTexelSetting::Alpha => ShadowTexel::Alpha,
             },
             tangent_shift: s.shading.tangent_shift,
             weights: ShadingWeights {
@@ -677,6 +745,7 @@ impl LitSurface {
             dampened,
             self.shadow,
             &p.weights,
+            p.ambient_term,
         )
         .extend(self.alpha)
     }
@@ -781,6 +850,7 @@ fn surface(
                 uv,
                 offset,
                 layer.lookups,
+                p.shadow_texel,
             )
         }
         _ => shading::shell_shadow_x4(
@@ -788,6 +858,7 @@ fn surface(
             uv,
             offset,
             layer.lookups,
+            p.shadow_texel,
         ),
     };
     if p.debug_view == DebugView::Shadow {

@@ -358,6 +358,41 @@ pub enum DebugView {
     Shadow,
 }
 
+/// How the three lobes of the three-tangent specular combine (thesis eq. 3.5;
+/// [`crate::shading::SpecularLobes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SpecularLobesSetting {
+    /// Their sum, as the thesis says (3.2.3), in `[0, 3]`.
+    Sum,
+    /// Their mean, in `[0, 1]` like one lobe: the default.
+    #[default]
+    Average,
+}
+
+/// Where `ψ_ambient` of eq. 3.7 stands ([`crate::shading::AmbientTerm`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum AmbientTermSetting {
+    /// Eq. 3.7 as printed: `ψ_ambient = ambient`, outside the strand colour (a grey lift).
+    Constant,
+    /// `ψ_ambient = ambient · strandColor`: an ambient light reflected by the strand: the
+    /// default.
+    #[default]
+    Strand,
+}
+
+/// What one shell-shadow lookup adds (thesis 3.2.2; [`crate::shading::ShadowTexel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadowTexelSetting {
+    /// 1 for a texel that is not transparent, 0 otherwise: the thesis's count.
+    Opaque,
+    /// The texel's alpha: the continuous form of the count; the default.
+    #[default]
+    Alpha,
+}
+
 /// Term weights of eq. 3.7.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -390,7 +425,7 @@ impl Default for WeightSettings {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShadingSettings {
-    /// Ambient level (ψ_ambient = ambient · strandColour).
+    /// Ambient level (`ψ_ambient`, times the strand colour or not: `ambient_term`).
     pub ambient: f32,
     /// Banks's exponent on the Kajiya–Kay diffuse (4.8).
     pub banks_exponent: f32,
@@ -400,6 +435,12 @@ pub struct ShadingSettings {
     pub dampened_exponent: f32,
     /// 1 or 3 specular tangents (Scheuermann).
     pub specular_tangents: u32,
+    /// With 3 tangents: the sum (thesis) or the mean of the three lobes.
+    pub specular_lobes: SpecularLobesSetting,
+    /// `ψ_ambient` of eq. 3.7: `ambient` alone, or `ambient · strandColour`.
+    pub ambient_term: AmbientTermSetting,
+    /// What each shell-shadow lookup adds: 1 if opaque (thesis), or the texel's alpha.
+    pub shadow_texel: ShadowTexelSetting,
     /// How far the two extra tangents are shifted along the normal.
     pub tangent_shift: f32,
     /// n of "height/n" (table 4.4): the bottom layer makes N/n shadow lookups.
@@ -418,6 +459,9 @@ impl Default for ShadingSettings {
             specular_exponent: 24.0,
             dampened_exponent: 4.0,
             specular_tangents: 1,
+            specular_lobes: SpecularLobesSetting::default(),
+            ambient_term: AmbientTermSetting::default(),
+            shadow_texel: ShadowTexelSetting::default(),
             tangent_shift: 0.15,
             shadow_divisor: 5,
             weights: WeightSettings::default(),
@@ -496,31 +540,106 @@ impl Default for SpotSettings {
     }
 }
 
-/// `[[stripes]]`: periodic bands along an object-space axis.
+/// How a stripe decides where its bands are (thesis 3.2.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StripeKind {
+    /// Bands of the specular lobe of a light fixed to the object, periodic in the lobe's value
+    /// (thesis 3.2.4: "we use the specular value to add spots and stripes"): the default.
+    #[default]
+    Light,
+    /// Bands across an object-space axis, periodic in object units.
+    Axis,
+}
+
+/// `[[stripes]]`: periodic bands in the lobe of a light fixed to the object (`kind = "light"`,
+/// the thesis's) or across an object-space axis (`kind = "axis"`).
+///
+/// The keys of the other kind are refused (an `axis` on a light stripe is an error naming it),
+/// so a file written when axis stripes were the only kind fails loudly instead of drawing
+/// something else. Keys left out take the defaults of the stripe's kind: the accessors
+/// ([`StripeSettings::period`], …) give the values in use.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StripeSettings {
+    /// Light bands (default) or axis bands.
+    pub kind: StripeKind,
     /// Stripe colour.
     pub colour: Vec3,
-    /// The bands run across this object-space direction.
-    pub axis: Vec3,
-    /// Distance between stripe centres, object units.
-    pub period: f32,
-    /// Width of the full-colour core, object units.
-    pub width: f32,
-    /// Width of the blend on each side, object units.
-    pub softness: f32,
+    /// Axis only: the bands run across this object-space direction (default `[1, 0, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<Vec3>,
+    /// Light only: direction of the light fixed to the object (default `[0, 1, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction: Option<Vec3>,
+    /// Light only: exponent of the lobe `max(0, n̂·l̂)^exponent` (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exponent: Option<f32>,
+    /// Distance between stripe centres: lobe values (light, default 0.25) or object units
+    /// (axis, default 4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub period: Option<f32>,
+    /// Width of the full-colour core, in the units of `period` (default 0.07 or 0.8).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<f32>,
+    /// Width of the blend on each side, in the units of `period` (default 0.03 or 0.3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub softness: Option<f32>,
 }
 
 impl Default for StripeSettings {
     fn default() -> Self {
         StripeSettings {
+            kind: StripeKind::default(),
             colour: Vec3::new(0.92, 0.9, 0.86),
-            axis: Vec3::X,
-            period: 4.0,
-            width: 0.8,
-            softness: 0.3,
+            axis: None,
+            direction: None,
+            exponent: None,
+            period: None,
+            width: None,
+            softness: None,
         }
+    }
+}
+
+impl StripeSettings {
+    /// The axis in use (axis stripes).
+    pub fn axis(&self) -> Vec3 {
+        self.axis.unwrap_or(Vec3::X)
+    }
+
+    /// The direction of the light in use (light stripes).
+    pub fn direction(&self) -> Vec3 {
+        self.direction.unwrap_or(Vec3::Y)
+    }
+
+    /// The lobe exponent in use (light stripes).
+    pub fn exponent(&self) -> f32 {
+        self.exponent.unwrap_or(1.0)
+    }
+
+    /// The period in use: the stripe's own, or its kind's default.
+    pub fn period(&self) -> f32 {
+        self.period.unwrap_or(match self.kind {
+            StripeKind::Light => 0.25,
+            StripeKind::Axis => 4.0,
+        })
+    }
+
+    /// The core width in use.
+    pub fn width(&self) -> f32 {
+        self.width.unwrap_or(match self.kind {
+            StripeKind::Light => 0.07,
+            StripeKind::Axis => 0.8,
+        })
+    }
+
+    /// The blend width in use.
+    pub fn softness(&self) -> f32 {
+        self.softness.unwrap_or(match self.kind {
+            StripeKind::Light => 0.03,
+            StripeKind::Axis => 0.3,
+        })
     }
 }
 
@@ -845,7 +964,15 @@ mod serialise_tests {
                 ..SpotSettings::default()
             },
         ];
-        scene.stripes = vec![StripeSettings::default()];
+        scene.stripes = vec![
+            StripeSettings::default(),
+            StripeSettings {
+                kind: StripeKind::Axis,
+                axis: Some(Vec3::new(1.0, 0.0, 1.0 / 3.0)),
+                period: Some(4.0 / 3.0),
+                ..StripeSettings::default()
+            },
+        ];
         scene.shading.debug_view = DebugView::Shadow;
         scene.mesh.kind = MeshKind::Obj;
         scene.mesh.path = Some(PathBuf::from("meshes/thing.obj"));

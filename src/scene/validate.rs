@@ -305,10 +305,46 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     for (k, stripe) in scene.stripes.iter().enumerate() {
         let key = |name: &str| format!("stripes[{k}].{name}");
         colour(&key("colour"), stripe.colour)?;
-        nonzero(&key("axis"), stripe.axis)?;
-        positive(&key("period"), stripe.period)?;
-        range_f32(&key("width"), stripe.width, 0.0, stripe.period)?;
-        range_f32(&key("softness"), stripe.softness, 0.0, stripe.period)?;
+        // The keys of the other kind are refused: a file from before light stripes (the
+        // default kind) has an `axis` and no `kind`, and must not draw something else quietly.
+        let foreign = |name: &str, own: &str, other: &str| {
+            Err((
+                key(name),
+                format!(
+                    "{} is a key of kind = \"{other}\" stripes; this stripe is kind = \"{own}\"{}",
+                    key(name),
+                    if own == "light" {
+                        " (the default: write kind = \"axis\" for bands across an axis)"
+                    } else {
+                        ""
+                    }
+                ),
+            ))
+        };
+        match stripe.kind {
+            super::StripeKind::Axis => {
+                if stripe.direction.is_some() {
+                    return foreign("direction", "axis", "light");
+                }
+                if stripe.exponent.is_some() {
+                    return foreign("exponent", "axis", "light");
+                }
+                nonzero(&key("axis"), stripe.axis())?;
+                positive(&key("period"), stripe.period())?;
+            }
+            super::StripeKind::Light => {
+                if stripe.axis.is_some() {
+                    return foreign("axis", "light", "axis");
+                }
+                nonzero(&key("direction"), stripe.direction())?;
+                range_f32(&key("exponent"), stripe.exponent(), 0.0, 10_000.0)?;
+                // Bands sit at lobe values (k + ½)·period within 0..=1: above 2, none.
+                positive(&key("period"), stripe.period())?;
+                range_f32(&key("period"), stripe.period(), 0.0, 2.0)?;
+            }
+        }
+        range_f32(&key("width"), stripe.width(), 0.0, stripe.period())?;
+        range_f32(&key("softness"), stripe.softness(), 0.0, stripe.period())?;
     }
     if let Some(w) = &scene.wind {
         nonzero("wind.direction", w.direction)?;
@@ -613,12 +649,57 @@ mod tests {
         assert!(err.message.contains("wind.strength"), "{err}");
         let err = parse("[wind]\ndirection = [0, 0, 0]\n").unwrap_err();
         assert!(err.message.contains("wind.direction"), "{err}");
-        let err = parse("[[stripes]]\nperiod = -1.0\n").unwrap_err();
+        let err = parse("[[stripes]]\nkind = \"axis\"\nperiod = -1.0\n").unwrap_err();
         assert!(err.message.contains("stripes[0].period"), "{err}");
         let err =
             parse("[[spots]]\nkind = \"light\"\ninner_threshold = 0.2\nouter_threshold = 0.5\n")
                 .unwrap_err();
         assert!(err.message.contains("outer_threshold"), "{err}");
         assert!(parse("time = 2.5\n[wind]\n[burn]\nmatches = [[0, 1, 0], [1, 0, 0]]\n").is_ok());
+        let err = parse("[[stripes]]\nkind = \"light\"\ndirection = [0, 0, 0]\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].direction"), "{err}");
+        assert_eq!(err.line, Some(3), "{err}");
+        let err = parse("[[stripes]]\nkind = \"light\"\nexponent = -1\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].exponent"), "{err}");
+        // A light stripe needs no axis, an axis stripe no light.
+        // A light stripe (the default kind) refuses an axis, an axis stripe a light.
+        let err = parse("[[stripes]]\ncolour = [1, 1, 1]\naxis = [1, 0, 0]\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].axis"), "{err}");
+        assert!(err.message.contains("kind = \"axis\""), "{err}");
+        assert_eq!(err.line, Some(3), "{err}");
+        let err = parse("[[stripes]]\nkind = \"axis\"\nexponent = 2\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].exponent"), "{err}");
+        let err = parse("[[stripes]]\nperiod = 5\n").unwrap_err();
+        assert!(err.message.contains("stripes[0].period"), "{err}");
+        assert!(parse("[[stripes]]\nkind = \"axis\"\nperiod = 5\nwidth = 2\n").is_ok());
+        assert!(parse("[[stripes]]\nkind = \"axis\"\naxis = [0, 0, 0]\n").is_err());
+    }
+
+    #[test]
+    fn convention_keys_take_named_values_only() {
+        for (table, key, good, bad) in [
+            ("[shading]", "specular_lobes", ["sum", "average"], "mean"),
+            (
+                "[shading]",
+                "ambient_term",
+                ["constant", "strand"],
+                "outside",
+            ),
+            ("[shading]", "shadow_texel", ["opaque", "alpha"], "count"),
+            ("[[stripes]]", "kind", ["axis", "light"], "band"),
+        ] {
+            for value in good {
+                let text = format!("{table}\n{key} = \"{value}\"\n");
+                assert!(parse(&text).is_ok(), "{text}");
+            }
+            let text = format!("seed = 1\n{table}\n{key} = \"{bad}\"\n");
+            let err = parse(&text).unwrap_err();
+            assert_eq!(err.file, "test.toml");
+            assert_eq!(err.line, Some(3), "{err}");
+            assert!(
+                err.message.contains(key) && err.message.contains(bad),
+                "{err}"
+            );
+        }
     }
 }

@@ -105,7 +105,7 @@ pub fn strand_lighting(
                 specular_to_dampen,
             }
         }
-        SpecularTangents::Three => {
+        SpecularTangents::Three(lobes) => {
             let [diffuse, centre_specular, specular_to_dampen, up_specular] = pow01_x4(
                 [bases.diffuse, bases.centre, bases.centre, bases.up],
                 [
@@ -118,7 +118,7 @@ pub fn strand_lighting(
             let down_specular = pow01(bases.down, exponents.specular);
             StrandLighting {
                 diffuse,
-                specular: mean_of_three(centre_specular, up_specular, down_specular),
+                specular: three_lobe_specular(centre_specular, up_specular, down_specular, lobes),
                 specular_to_dampen,
             }
         }
@@ -157,7 +157,7 @@ pub fn strand_lighting_x4(
     );
     let specular = match tangents {
         SpecularTangents::One => centre_specular,
-        SpecularTangents::Three => {
+        SpecularTangents::Three(lobes) => {
             let n = normal.normalize_or_zero();
             let shifted = |shift: f32| {
                 let t = t
@@ -167,7 +167,7 @@ pub fn strand_lighting_x4(
             };
             let up = pow01_x4(shifted(shift), [exponents.specular; LANES]);
             let down = pow01_x4(shifted(-shift), [exponents.specular; LANES]);
-            std::array::from_fn(|i| mean_of_three(centre_specular[i], up[i], down[i]))
+            std::array::from_fn(|i| three_lobe_specular(centre_specular[i], up[i], down[i], lobes))
         }
     };
     std::array::from_fn(|i| StrandLighting {
@@ -205,7 +205,7 @@ impl LightingBases {
         let centre = specular_base_unit(t, l, e);
         let (up, down) = match tangents {
             SpecularTangents::One => (0.0, 0.0),
-            SpecularTangents::Three => {
+            SpecularTangents::Three(_) => {
                 let n = normal.normalize_or_zero();
                 (
                     specular_base_unit(shift_tangent(t, n, shift), l, e),
@@ -222,10 +222,55 @@ impl LightingBases {
     }
 }
 
-/// The three-tangent specular of eq. 3.5: the mean of the three lobes, summed in this order.
+/// How the three lobes of the three-tangent specular (eq. 3.5) combine into one term.
+///
+/// The thesis (3.2.3, after eq. 3.5): "The new specular term is the **sum** of the three
+/// specular values, having three different tangent values" ([`SpecularLobes::Sum`]). The same
+/// section, after eq. 3.7, gives the range of every term as "Ambient, diffuse, specularly all
+/// ranges from \[0,1\]", which only the mean keeps ([`SpecularLobes::Average`]). Scene key
+/// `shading.specular_lobes`; the default is [`SpecularLobes::Average`]: see
+/// [`three_lobe_specular`] for why.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SpecularLobes {
+    /// The thesis's sum of the three lobes, in `[0, 3]` ([`specular_lobe_sum`]).
+    Sum,
+    /// The mean of the three lobes, in `[0, 1]` like one lobe ([`specular_lobe_mean`]).
+    #[default]
+    Average,
+}
+
+/// The thesis's three-tangent specular (3.2.3, eq. 3.5): "the sum of the three specular
+/// values", `centre + up + down`, added in that order; in `[0, 3]` for lobes in `[0, 1]`.
 #[inline(always)]
-fn mean_of_three(centre: f32, up: f32, down: f32) -> f32 {
-    (centre + up + down) / 3.0
+pub fn specular_lobe_sum(centre: f32, up: f32, down: f32) -> f32 {
+    centre + up + down
+}
+
+/// The three-tangent specular as a mean (pelage's earlier convention):
+/// `(centre + up + down) / 3`, summed in that order and then divided once; in `[0, 1]` for
+/// lobes in `[0, 1]`, so the specular weight of eq. 3.7 means the same with one or three
+/// tangents.
+#[inline(always)]
+pub fn specular_lobe_mean(centre: f32, up: f32, down: f32) -> f32 {
+    specular_lobe_sum(centre, up, down) / 3.0
+}
+
+/// The three lobes of eq. 3.5 combined as `lobes` says: [`specular_lobe_sum`] or
+/// [`specular_lobe_mean`].
+///
+/// Why the mean is the default, though the thesis writes "sum": its own ranges after eq. 3.7
+/// put the specular in `[0, 1]`, which the sum leaves (up to 3); with the mean the specular
+/// weight of eq. 3.7 means the same with one or three tangents, so switching
+/// `specular_tangents` (a column of thesis table 4.4) changes the highlight's shape, not its
+/// brightness. Rendered, `scenes/specular.toml` with the sum turns the lit half of the torus
+/// white (every channel clamped at 1); with the sum a scene needs a third of the weight to
+/// look the same (README, "Where pelage departs from the thesis").
+#[inline(always)]
+pub fn three_lobe_specular(centre: f32, up: f32, down: f32, lobes: SpecularLobes) -> f32 {
+    match lobes {
+        SpecularLobes::Sum => specular_lobe_sum(centre, up, down),
+        SpecularLobes::Average => specular_lobe_mean(centre, up, down),
+    }
 }
 
 /// How many tangents the specular term of eq. 3.5 uses (thesis table 4.4: 1 or 3).
@@ -235,8 +280,8 @@ pub enum SpecularTangents {
     #[default]
     One,
     /// The strand tangent and two copies shifted along the normal, back and forth
-    /// (Scheuermann).
-    Three,
+    /// (Scheuermann), their lobes combined as the [`SpecularLobes`] says.
+    Three(SpecularLobes),
 }
 
 /// Scheuermann's shifted tangent (thesis 3.2.3, eq. 3.5): `normalize(t + shift·n)`.
@@ -251,10 +296,9 @@ pub fn shift_tangent(tangent: Vec3, normal: Vec3, shift: f32) -> Vec3 {
 /// The specular term with one or three tangents (thesis 3.2.3, eq. 3.5).
 ///
 /// With [`SpecularTangents::One`] it is [`kajiya_kay_specular`]. With
-/// [`SpecularTangents::Three`] it is the **mean** of the speculars of `t`,
-/// `shift_tangent(t, n, +shift)` and `shift_tangent(t, n, −shift)`. The thesis says "the sum";
-/// we average so the term stays in `[0, 1]` like the others of eq. 3.7 and its weight keeps
-/// the same meaning for one or three tangents. The three are summed in that fixed order.
+/// [`SpecularTangents::Three`] it combines the speculars of `t`, `shift_tangent(t, n, +shift)`
+/// and `shift_tangent(t, n, −shift)` with [`three_lobe_specular`]: their mean (the default) or
+/// their sum (the thesis's words), in that fixed order.
 #[inline]
 pub fn specular_with_tangents(
     tangent: Vec3,
@@ -271,11 +315,11 @@ pub fn specular_with_tangents(
     let centre = specular_unit(t, l, e, exponent);
     match tangents {
         SpecularTangents::One => centre,
-        SpecularTangents::Three => {
+        SpecularTangents::Three(lobes) => {
             let n = normal.normalize_or_zero();
             let up = specular_unit(shift_tangent(t, n, shift), l, e, exponent);
             let down = specular_unit(shift_tangent(t, n, -shift), l, e, exponent);
-            (centre + up + down) / 3.0
+            three_lobe_specular(centre, up, down, lobes)
         }
     }
 }
@@ -299,6 +343,34 @@ mod tests {
             t.dot(l) * t.dot(e) + sl * se,
             1e-6 + sin_tol(sl) + sin_tol(se),
         )
+    }
+
+    /// Every tangent setting.
+    const TANGENTS: [SpecularTangents; 3] = [
+        SpecularTangents::One,
+        SpecularTangents::Three(SpecularLobes::Sum),
+        SpecularTangents::Three(SpecularLobes::Average),
+    ];
+
+    #[test]
+    fn lobe_sum_and_mean_match_f64() {
+        // Bound: the f32 sum of three values in [0, 1] is within 2 ulps of 2 (2.4e-7) of the
+        // exact sum, the mean within that over 3 plus half an ulp of 1.
+        let mut rng = Lcg::new(16);
+        for _ in 0..5000 {
+            let (c, u, d) = (rng.unit(), rng.unit(), rng.unit());
+            let exact = f64::from(c) + f64::from(u) + f64::from(d);
+            assert_close(specular_lobe_sum(c, u, d), exact, 5e-7, "sum");
+            assert_close(specular_lobe_mean(c, u, d), exact / 3.0, 3e-7, "mean");
+            let sum = three_lobe_specular(c, u, d, SpecularLobes::Sum);
+            let mean = three_lobe_specular(c, u, d, SpecularLobes::Average);
+            assert_eq!(sum.to_bits(), specular_lobe_sum(c, u, d).to_bits());
+            assert_eq!(mean.to_bits(), specular_lobe_mean(c, u, d).to_bits());
+        }
+        // Three full lobes: the thesis's sum reaches 3, the mean 1.
+        assert_eq!(specular_lobe_sum(1.0, 1.0, 1.0), 3.0);
+        assert_eq!(specular_lobe_mean(1.0, 1.0, 1.0), 1.0);
+        assert_eq!(SpecularLobes::default(), SpecularLobes::Average);
     }
 
     /// Error bound after `max(0, x)^p`: `p·max(x,0)^(p−1)·dx` (+ 1e-6), exact up to first order.
@@ -377,26 +449,33 @@ mod tests {
     }
 
     #[test]
-    fn shifted_tangents_match_f64_mean() {
+    fn shifted_tangents_match_f64_sum_and_mean() {
         let mut rng = Lcg::new(12);
-        for _ in 0..1000 {
+        for k in 0..1000 {
             let n = rng.direction();
             let t = (rng.direction() - n * 0.3).normalize_or(Vec3::X);
             let (l, e) = (rng.cube(), rng.cube());
             let (p, shift) = (rng.range(1.0, 32.0), rng.range(-0.5, 0.5));
             let one = specular_with_tangents(t, n, l, e, p, SpecularTangents::One, shift);
             assert_eq!(one, kajiya_kay_specular(t, l, e, p));
-            let mut mean = 0.0;
+            let mut sum = 0.0;
             let mut tol = 0.0;
             for s in [0.0, f64::from(shift), -f64::from(shift)] {
                 let ts = (t.as_dvec3() + s * n.as_dvec3()).normalize().as_vec3();
                 let (x, dx) = spec_base64(ts, l, e);
-                mean += x.max(0.0).powf(f64::from(p)) / 3.0;
+                sum += x.max(0.0).powf(f64::from(p));
                 // The shifted tangent itself carries ~1e-7 error, which moves x by < 1e-6.
-                tol += pow_tol(x, dx + 1e-6, f64::from(p)) / 3.0;
+                tol += pow_tol(x, dx + 1e-6, f64::from(p));
             }
-            let three = specular_with_tangents(t, n, l, e, p, SpecularTangents::Three, shift);
-            assert_close(three, mean, tol, "three-tangent specular");
+            // Two f32 additions (and a division) add at most 3 ulps of 3: 1e-6.
+            let (lobes, expected, tol) = if k % 2 == 0 {
+                (SpecularLobes::Sum, sum, tol + 1e-6)
+            } else {
+                (SpecularLobes::Average, sum / 3.0, tol / 3.0 + 1e-6)
+            };
+            let three =
+                specular_with_tangents(t, n, l, e, p, SpecularTangents::Three(lobes), shift);
+            assert_close(three, expected, tol, "three-tangent specular");
         }
     }
 
@@ -426,7 +505,7 @@ mod tests {
                 dampened: [rng.range(1.0, 40.0), f32::NAN, 0.0][k % 3],
             };
             let shift = rng.range(-0.5, 0.5);
-            for tangents in [SpecularTangents::One, SpecularTangents::Three] {
+            for tangents in TANGENTS {
                 let got = strand_lighting(t, n, l, e, exponents, tangents, shift);
                 let want = StrandLighting {
                     diffuse: kajiya_kay_diffuse(t, l, exponents.banks),
@@ -474,7 +553,7 @@ mod tests {
                 dampened: [rng.range(1.0, 40.0), f32::NAN, 0.0][k % 3],
             };
             let shift = rng.range(-0.5, 0.5);
-            for tangents in [SpecularTangents::One, SpecularTangents::Three] {
+            for tangents in TANGENTS {
                 let quad = strand_lighting_x4(
                     &Vec3x4::from_lanes(t),
                     &Vec3x4::from_lanes(n),
@@ -524,7 +603,7 @@ mod tests {
             Vec3::Y,
             Vec3::Y,
             4.0,
-            SpecularTangents::Three,
+            SpecularTangents::Three(SpecularLobes::Average),
             1.0,
         );
         assert!((0.0..=1.0).contains(&v));

@@ -65,15 +65,56 @@ impl Default for ShadingWeights {
     }
 }
 
+/// Where `ψ_ambient` of eq. 3.7 stands.
+///
+/// Eq. 3.7 as printed, `ψ_ambient + strandColor·(ψ_diffuse + ψ_specularity) + …`, leaves the
+/// ambient outside the strand-colour product ([`AmbientTerm::Constant`]); pelage's earlier
+/// convention reflects it off the strand ([`AmbientTerm::Strand`]). Scene key
+/// `shading.ambient_term`; the default is [`AmbientTerm::Strand`]: a constant ambient adds the
+/// same grey to every channel of every strand, which washes the fur colour out (a brown torus
+/// turns beige under the default `ambient = 0.25`) and lifts the shadowed roots towards grey
+/// instead of a dark fur colour (README, "Where pelage departs from the thesis").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AmbientTerm {
+    /// `ψ_ambient = ambient`, the same in every channel ([`ambient_constant`]).
+    Constant,
+    /// `ψ_ambient = ambient · strandColor` ([`ambient_of_strand`]).
+    #[default]
+    Strand,
+}
+
+/// `ψ_ambient` of eq. 3.7 as printed (thesis 3.2.3): the ambient level alone, the same in
+/// every channel, added outside the strand colour.
+#[inline(always)]
+pub fn ambient_constant(ambient: f32) -> Vec3 {
+    Vec3::splat(ambient)
+}
+
+/// `ψ_ambient = ambient · strandColor`: an ambient light of level `ambient` reflected by the
+/// strand, channel by channel `strand_colour[c] · ambient`.
+#[inline(always)]
+pub fn ambient_of_strand(ambient: f32, strand_colour: Vec3) -> Vec3 {
+    strand_colour * ambient
+}
+
+/// `ψ_ambient` as `term` says: [`ambient_constant`] or [`ambient_of_strand`].
+#[inline(always)]
+pub fn ambient_term(ambient: f32, strand_colour: Vec3, term: AmbientTerm) -> Vec3 {
+    match term {
+        AmbientTerm::Constant => ambient_constant(ambient),
+        AmbientTerm::Strand => ambient_of_strand(ambient, strand_colour),
+    }
+}
+
 /// Final colour, thesis eq. 3.7:
 /// `ψ_final = ψ_ambient + strandColor·(ψ_diffuse + ψ_specularity) + ψ_dampenedspecularity − ψ_shadow`,
 /// each term scaled by its weight, per channel:
 ///
-/// `w_a·ambient·strand + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow`,
-/// then each channel clamped to `[0, 1]`.
+/// `A + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow`,
+/// with `A = ambient_term(w_a·ambient, strand, term)` ([`ambient_term`]: `w_a·ambient` alone,
+/// or times the strand colour), then each channel clamped to `[0, 1]`.
 ///
-/// Choices where the thesis is open: `ψ_ambient = ambient × strandColour` (an ambient light of
-/// level `ambient` reflected by the strand); the light colour multiplies the lit terms and the
+/// Choices where the thesis is open: the light colour multiplies the lit terms and the
 /// dampened specular (a white highlight under a white light), not the ambient or the shadow.
 /// The sum is evaluated left to right in the order written above; a NaN channel becomes 0.
 #[allow(clippy::too_many_arguments)] // one argument per term of eq. 3.7, in its order
@@ -87,6 +128,7 @@ pub fn final_colour(
     dampened: f32,
     shadow: f32,
     weights: &ShadingWeights,
+    term: AmbientTerm,
 ) -> Vec3 {
     let lit = weights.diffuse * diffuse + weights.specular * specular;
     let highlight = weights.dampened * dampened;
@@ -95,9 +137,9 @@ pub fn final_colour(
     // formula's own operations in its order.
     let lanes = |v: Vec3| f32x4::new([v.x, v.y, v.z, 0.0]);
     let (s, l) = (lanes(strand_colour), lanes(light_colour));
+    let a = lanes(ambient_term(weights.ambient * ambient, strand_colour, term));
     let splat = f32x4::splat;
-    let sum = splat(weights.ambient * ambient) * s + s * l * splat(lit) + l * splat(highlight)
-        - splat(dark);
+    let sum = a + s * l * splat(lit) + l * splat(highlight) - splat(dark);
     let [x, y, z, _] = saturate_x4(sum).to_array();
     Vec3::new(x, y, z)
 }
@@ -148,7 +190,17 @@ mod tests {
         );
         assert_eq!(w.shadow, 0.08);
         // Six opaque lookups over a fully lit white strand leave it visible.
-        let c = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 1.0, 0.0, 0.0, 6.0, &w);
+        let c = final_colour(
+            Vec3::ONE,
+            Vec3::ONE,
+            0.0,
+            1.0,
+            0.0,
+            0.0,
+            6.0,
+            &w,
+            AmbientTerm::Strand,
+        );
         assert!(c.x > 0.5);
     }
 
@@ -165,13 +217,16 @@ mod tests {
             p: f32,
             sh: f32,
             w: &ShadingWeights,
+            term: AmbientTerm,
         ) -> Vec3 {
             let lit = w.diffuse * d + w.specular * sp;
             let (highlight, dark) = (w.dampened * p, w.shadow * sh);
             let channel = |s: f32, l: f32| {
-                crate::shading::numeric::saturate(
-                    w.ambient * a * s + s * l * lit + l * highlight - dark,
-                )
+                let ambient = match term {
+                    AmbientTerm::Strand => w.ambient * a * s,
+                    AmbientTerm::Constant => w.ambient * a,
+                };
+                crate::shading::numeric::saturate(ambient + s * l * lit + l * highlight - dark)
             };
             Vec3::new(channel(s.x, l.x), channel(s.y, l.y), channel(s.z, l.z))
         }
@@ -207,8 +262,9 @@ mod tests {
                 shadow: v[15],
             };
             let (s, l) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
-            let got = final_colour(s, l, v[6], v[7], v[8], v[9], v[10], &w);
-            let expected = scalar(s, l, v[6], v[7], v[8], v[9], v[10], &w);
+            let term = [AmbientTerm::Strand, AmbientTerm::Constant][k % 2];
+            let got = final_colour(s, l, v[6], v[7], v[8], v[9], v[10], &w, term);
+            let expected = scalar(s, l, v[6], v[7], v[8], v[9], v[10], &w, term);
             assert_eq!(
                 got.to_array().map(f32::to_bits),
                 expected.to_array().map(f32::to_bits),
@@ -221,7 +277,7 @@ mod tests {
     fn final_colour_matches_f64() {
         // Bound: 1e-6 absolute (a handful of products of values ≤ 2).
         let mut rng = Lcg::new(21);
-        for _ in 0..2000 {
+        for n in 0..2000 {
             let strand = Vec3::new(rng.unit(), rng.unit(), rng.unit());
             let light = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 1.5;
             let (a, d, s, p, sh) = (
@@ -238,11 +294,14 @@ mod tests {
                 dampened: rng.unit(),
                 shadow: rng.range(0.0, 0.2),
             };
-            let got = final_colour(strand, light, a, d, s, p, sh, &w);
+            let term = [AmbientTerm::Strand, AmbientTerm::Constant][n % 2];
+            let got = final_colour(strand, light, a, d, s, p, sh, &w, term);
             for k in 0..3 {
                 let (sc, lc) = (f64::from(strand[k]), f64::from(light[k]));
                 let f = |x: f32| f64::from(x);
-                let expected = (f(w.ambient) * f(a) * sc
+                // ψ_ambient: times the strand colour, or the level alone (eq. 3.7 as printed).
+                let reflected = if term == AmbientTerm::Strand { sc } else { 1.0 };
+                let expected = (f(w.ambient) * f(a) * reflected
                     + sc * lc * (f(w.diffuse) * f(d) + f(w.specular) * f(s))
                     + lc * f(w.dampened) * f(p)
                     - f(w.shadow) * f(sh))
@@ -255,9 +314,10 @@ mod tests {
     #[test]
     fn final_colour_clamps_and_survives_nan() {
         let w = ShadingWeights::default();
-        let bright = final_colour(Vec3::ONE, Vec3::ONE, 1.0, 1.0, 1.0, 0.3, 0.0, &w);
+        let strand = AmbientTerm::Strand;
+        let bright = final_colour(Vec3::ONE, Vec3::ONE, 1.0, 1.0, 1.0, 0.3, 0.0, &w, strand);
         assert_eq!(bright, Vec3::ONE);
-        let black = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 0.0, 0.0, 0.0, 100.0, &w);
+        let black = final_colour(Vec3::ONE, Vec3::ONE, 0.0, 0.0, 0.0, 0.0, 100.0, &w, strand);
         assert_eq!(black, Vec3::ZERO);
         let nan = final_colour(
             Vec3::splat(f32::NAN),
@@ -268,9 +328,20 @@ mod tests {
             0.3,
             0.0,
             &w,
+            strand,
         );
         assert_eq!(nan, Vec3::ZERO);
-        let inf = final_colour(Vec3::ONE, Vec3::ONE, f32::INFINITY, 0.0, 0.0, 0.0, 0.0, &w);
+        let inf = final_colour(
+            Vec3::ONE,
+            Vec3::ONE,
+            f32::INFINITY,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            &w,
+            strand,
+        );
         assert_eq!(inf, Vec3::ONE);
         // Ambient alone: ambient × strand colour.
         let amb = final_colour(
@@ -282,8 +353,42 @@ mod tests {
             0.0,
             0.0,
             &w,
+            strand,
         );
         assert_close(amb.x, 0.2, 1e-7, "ambient r");
         assert_close(amb.y, 0.08, 1e-7, "ambient g");
+        // Eq. 3.7 as printed: the ambient level alone, in every channel.
+        let amb = final_colour(
+            Vec3::new(0.5, 0.2, 0.1),
+            Vec3::ONE,
+            0.4,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            &w,
+            AmbientTerm::Constant,
+        );
+        assert_eq!(amb, Vec3::splat(0.4));
+    }
+
+    #[test]
+    fn ambient_terms_match_f64() {
+        // Bound: one f32 product, half an ulp of a value ≤ 4: 3e-7.
+        let mut rng = Lcg::new(24);
+        for _ in 0..2000 {
+            let a = rng.range(0.0, 2.0);
+            let strand = Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 2.0;
+            let constant = ambient_term(a, strand, AmbientTerm::Constant);
+            let reflected = ambient_term(a, strand, AmbientTerm::Strand);
+            assert_eq!(constant, ambient_constant(a));
+            assert_eq!(reflected, ambient_of_strand(a, strand));
+            for k in 0..3 {
+                assert_close(constant[k], f64::from(a), 0.0, "constant ambient");
+                let expected = f64::from(a) * f64::from(strand[k]);
+                assert_close(reflected[k], expected, 3e-7, "ambient of the strand");
+            }
+        }
+        assert_eq!(AmbientTerm::default(), AmbientTerm::Strand);
     }
 }

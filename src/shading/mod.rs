@@ -7,12 +7,12 @@
 //! |---|---|---|
 //! | 3.2.1 | [`to_tangent_space`], [`sin_between`] | `tangent_space.rs` |
 //! | eq. 2.5 (+ Banks 4.8) | [`kajiya_kay_diffuse`], [`BANKS_EXPONENT`] | `kajiya_kay.rs` |
-//! | eq. 2.7, eq. 3.5 | [`kajiya_kay_specular`], [`shift_tangent`], [`specular_with_tangents`] | `kajiya_kay.rs` |
+//! | eq. 2.7, eq. 3.5 | [`kajiya_kay_specular`], [`shift_tangent`], [`specular_with_tangents`], [`three_lobe_specular`] ([`specular_lobe_sum`], [`specular_lobe_mean`]) | `kajiya_kay.rs` |
 //! | 3.2.3 dampening | [`dampened_specular`] | `lighting.rs` |
-//! | eq. 3.7 | [`final_colour`], [`ShadingWeights`] | `lighting.rs` |
+//! | eq. 3.7 | [`final_colour`], [`ShadingWeights`], [`ambient_term`] ([`ambient_constant`], [`ambient_of_strand`]) | `lighting.rs` |
 //! | 3.2.2 projection | [`project_to_uv`], [`project_to_uv_dropping`] | `projection.rs` |
-//! | 3.2.2 shadow | [`shadow_change`], [`shadow_lookup_count`], [`shell_shadow`] | `shadow.rs` |
-//! | 3.2.4 spots, stripes | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`] | `spots.rs` |
+//! | 3.2.2 shadow | [`shadow_change`], [`shadow_lookup_count`], [`shell_shadow`], [`shadow_texel`] ([`shadow_of_opaque`], [`shadow_of_alpha`]) | `shadow.rs` |
+//! | 3.2.4 spots, stripes | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`], [`light_stripe_intensity`] | `spots.rs` |
 //! | 3.3 wind | [`wind_force`], [`wind_displacement`], [`wind_uv_offset`], [`bend_tangent`] | `wind.rs` |
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
 //! | beyond: maps | [`layer_within_length`], [`density_alpha`], [`density_band`], [`comb_lean`], [`tint_strand`] | `maps.rs` |
@@ -51,6 +51,14 @@
 //! - Lobe bases and weights are saturated to `[0, 1]` with NaN → 0.
 //! - Rings (spots, stripes) use the Hermite smoothstep of the linear ring coordinate.
 //! - Eq. 3.7 clamps each channel to `[0, 1]`; a NaN channel becomes 0.
+//! - Four departures from the thesis's words are scene keys, both forms here, defaults with
+//!   their reasons in the docs of each (and the README, "Where pelage departs from the
+//!   thesis"): the three lobes of eq. 3.5 averaged or summed ([`SpecularLobes`], default the
+//!   mean); `ψ_ambient` times the strand colour or alone ([`AmbientTerm`], default times the
+//!   strand colour); a shadow lookup adding its alpha or 1 when the texel is not transparent,
+//!   alpha ≥ [`SHADOW_OPAQUE_ALPHA`] ([`ShadowTexel`], default the alpha); stripes as bands of
+//!   the lobe of a light fixed to the object ([`light_stripe_intensity`], the default, the
+//!   thesis's) or across an axis ([`stripe_intensity`]).
 //!
 //! # How the tests check the numbers
 //! Each term is compared with an f64 reimplementation written separately in its test (sines
@@ -85,14 +93,14 @@ pub mod wind;
 
 pub use burn::{BURN_THRESHOLD, BurnOutcome, BurnSchedule, burn_exponent, burn_rule};
 pub use kajiya_kay::{
-    BANKS_EXPONENT, LightingExponents, SpecularTangents, StrandLighting, kajiya_kay_diffuse,
-    kajiya_kay_specular, shift_tangent, specular_with_tangents, strand_lighting,
-    strand_lighting_x4,
+    BANKS_EXPONENT, LightingExponents, SpecularLobes, SpecularTangents, StrandLighting,
+    kajiya_kay_diffuse, kajiya_kay_specular, shift_tangent, specular_lobe_mean, specular_lobe_sum,
+    specular_with_tangents, strand_lighting, strand_lighting_x4, three_lobe_specular,
 };
 pub use lanes::{LANES, Vec3x4};
 pub use lighting::{
-    DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
-    dampened_specular, final_colour,
+    AmbientTerm, DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
+    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, final_colour,
 };
 pub use lod::{
     lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,
@@ -106,11 +114,13 @@ pub use motion::{
 };
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
 pub use shadow::{
-    SHADOW_MIN_COS, shadow_change, shadow_lookup_count, shell_shadow, shell_shadow_x4,
+    SHADOW_MIN_COS, SHADOW_OPAQUE_ALPHA, ShadowTexel, shadow_change, shadow_lookup_count,
+    shadow_of_alpha, shadow_of_opaque, shadow_texel, shell_shadow, shell_shadow_x4,
 };
 pub use spots::{
     apply_spot, apply_spots, ellipsoid_spot_intensity, light_spot_cosine, light_spot_cosine_below,
-    light_spot_intensity, light_spot_lobe, spot_gradient, stripe_intensity,
+    light_spot_intensity, light_spot_lobe, light_stripe_band, light_stripe_intensity,
+    spot_gradient, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

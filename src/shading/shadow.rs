@@ -21,25 +21,96 @@ pub fn shadow_lookup_count(number_of_shells: u32, shell_index: u32, divisor: u32
         .unwrap_or(0)
 }
 
-/// Shell self-shadow value (thesis 3.2.2): for `k` in `1..=m` sample the current shell's alpha
-/// at `uv + shadow_lookup·(k/m)` and add it; the result is in `[0, m]`.
+/// What one lookup of the shell self-shadow adds (thesis 3.2.2). Scene key
+/// `shading.shadow_texel`.
 ///
-/// The thesis's rule is binary (a transparent texel adds nothing, an opaque one adds to
-/// `shadowValue`); adding the sampled alpha is its continuous form, which agrees on alpha 0
-/// and 1 and does not alias on filtered (bilinear, mipmapped) alpha. Samples are saturated to
-/// `[0, 1]` (NaN counts as 0) and summed in order `k = 1, 2, …, m`. `m = 0` gives 0 without
-/// sampling. A non-finite `uv` or `shadow_lookup` component is treated as 0.
+/// The thesis: "check if the according pixel is transparent or not. If it is transparent; we
+/// do not shade the current pixel. Else; shadowValue is increased": a count of the texels that
+/// are not transparent ([`ShadowTexel::Opaque`]). Pelage's earlier convention adds the texel's
+/// alpha instead ([`ShadowTexel::Alpha`]), the continuous form of the count: the two agree on
+/// alpha 0 and 1. The default is [`ShadowTexel::Alpha`]; see [`shadow_of_opaque`] for why.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowTexel {
+    /// 1 for a texel that is not transparent, else 0 ([`shadow_of_opaque`]).
+    Opaque,
+    /// The texel's alpha, saturated ([`shadow_of_alpha`]).
+    #[default]
+    Alpha,
+}
+
+/// Alpha below which a texel is transparent for [`shadow_of_opaque`]: half the smallest
+/// non-zero 8-bit alpha, the threshold below which the fur fragment stage itself discards a
+/// texel (`render::fragment::ALPHA_DISCARD`). A texel counts as opaque when its 8-bit alpha is
+/// at least 1, i.e. when a strand's slice covers any of it.
+pub const SHADOW_OPAQUE_ALPHA: f32 = 0.5 / 255.0;
+
+/// One lookup as the thesis counts it (3.2.2, "shadowValue is increased" where the texel is not
+/// transparent): 1 when `alpha ≥ SHADOW_OPAQUE_ALPHA`, else 0 (NaN gives 0).
+///
+/// Why it is not the default: the shell textures' alpha is an anti-aliased coverage times
+/// Lengyel's Gaussian, so almost every texel is "not transparent", and mip levels merge texels
+/// (the lookups read the level nearest the level of detail). Measured on `scenes/torus.toml`:
+/// 85–93 % of the texels of layers 0–10 count at level 0 and 100 % from level 2 on; layer 20
+/// goes from 42 % (level 0) to 94 % (level 2) while its mean alpha stays 0.14. The count thus
+/// darkens every strand of a layer alike (Banks's ad-hoc shadow, which the thesis set aside)
+/// and grows with distance; the alpha sum keeps its mean on every level (README, "Where pelage
+/// departs from the thesis").
+#[inline(always)]
+pub fn shadow_of_opaque(alpha: f32) -> f32 {
+    if alpha >= SHADOW_OPAQUE_ALPHA {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// One lookup as its alpha, saturated to `[0, 1]` (NaN gives 0): the continuous form of
+/// [`shadow_of_opaque`], equal to it on alpha 0 and 1, and the same on average over the texels
+/// a mip level merges.
+#[inline(always)]
+pub fn shadow_of_alpha(alpha: f32) -> f32 {
+    saturate(alpha)
+}
+
+/// One lookup's shadow as `texel` says: [`shadow_of_opaque`] or [`shadow_of_alpha`].
+#[inline(always)]
+pub fn shadow_texel(alpha: f32, texel: ShadowTexel) -> f32 {
+    match texel {
+        ShadowTexel::Opaque => shadow_of_opaque(alpha),
+        ShadowTexel::Alpha => shadow_of_alpha(alpha),
+    }
+}
+
+/// [`shadow_texel`] on four alphas, lane by lane the same bits.
+#[inline(always)]
+fn shadow_texel_x4(alphas: f32x4, texel: ShadowTexel) -> f32x4 {
+    match texel {
+        // A NaN lane compares false: 0, as the scalar form.
+        ShadowTexel::Opaque => alphas
+            .simd_ge(f32x4::splat(SHADOW_OPAQUE_ALPHA))
+            .select(f32x4::ONE, f32x4::ZERO),
+        ShadowTexel::Alpha => saturate_x4(alphas),
+    }
+}
+
+/// Shell self-shadow value (thesis 3.2.2): for `k` in `1..=m` sample the current shell's alpha
+/// at `uv + shadow_lookup·(k/m)` and add what [`shadow_texel`] makes of it (1 per opaque
+/// texel, or the alpha); the result is in `[0, m]`.
+///
+/// Lookups are summed in order `k = 1, 2, …, m`. `m = 0` gives 0 without sampling. A
+/// non-finite `uv` or `shadow_lookup` component is treated as 0.
 #[inline]
 pub fn shell_shadow(
     mut sample_alpha: impl FnMut(Vec2) -> f32,
     uv: Vec2,
     shadow_lookup: Vec2,
     lookups: u32,
+    texel: ShadowTexel,
 ) -> f32 {
     let path = LookupPath::new(uv, shadow_lookup, lookups);
     let mut shadow = 0.0;
     for k in 1..=lookups {
-        shadow += saturate(sample_alpha(path.point(k)));
+        shadow += shadow_texel(sample_alpha(path.point(k)), texel);
     }
     shadow
 }
@@ -90,6 +161,7 @@ pub fn shell_shadow_x4(
     uv: Vec2,
     shadow_lookup: Vec2,
     lookups: u32,
+    texel: ShadowTexel,
 ) -> f32 {
     let path = LookupPath::new(uv, shadow_lookup, lookups);
     let mut shadow = 0.0;
@@ -97,10 +169,11 @@ pub fn shell_shadow_x4(
         let k = [0, 1, 2, 3].map(|i| first.saturating_add(i).min(lookups));
         let (u, v) = path.points_x4(k);
         // Surplus lanes are multiplied by 0 and add +0, which leaves the sum's bits alone: it
-        // starts at +0 and every saturated alpha is +0 or in (0, 1]. No branch on the count or
+        // starts at +0 and every lookup's shadow is +0 or in (0, 1]. No branch on the count or
         // on the alphas.
         let counted = [0, 1, 2, 3].map(|i| f32::from(u8::from(first.saturating_add(i) <= lookups)));
-        let alphas = saturate_x4(f32x4::new(sample_alpha_x4(u, v))) * f32x4::new(counted);
+        let alphas =
+            shadow_texel_x4(f32x4::new(sample_alpha_x4(u, v)), texel) * f32x4::new(counted);
         for alpha in alphas.to_array() {
             shadow += alpha;
         }
@@ -160,6 +233,7 @@ mod tests {
             Vec2::new(0.25, 0.5),
             Vec2::new(0.3, -0.6),
             3,
+            ShadowTexel::Alpha,
         );
         assert_eq!(s, 3.0);
         assert_eq!(seen.len(), 3);
@@ -184,6 +258,7 @@ mod tests {
             let uv = Vec2::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
             let offset = Vec2::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
             let lookups = k % 14;
+            let texel = [ShadowTexel::Alpha, ShadowTexel::Opaque][k as usize % 2];
             let mut seen = Vec::new();
             let batched = shell_shadow_x4(
                 |u, v| {
@@ -194,10 +269,11 @@ mod tests {
                 uv,
                 offset,
                 lookups,
+                texel,
             );
             assert_eq!(
                 batched.to_bits(),
-                shell_shadow(alpha, uv, offset, lookups).to_bits(),
+                shell_shadow(alpha, uv, offset, lookups, texel).to_bits(),
                 "{uv} {offset} {lookups}"
             );
             assert_eq!(seen.len(), lookups.div_ceil(4) as usize * 4);
@@ -210,6 +286,7 @@ mod tests {
                 uv,
                 offset,
                 lookups,
+                texel,
             );
             let bits = |points: &[Vec2]| {
                 points
@@ -225,39 +302,39 @@ mod tests {
         }
         for bad in [f32::NAN, f32::INFINITY] {
             let uv = Vec2::new(bad, 0.5);
-            assert_eq!(
-                shell_shadow_x4(
-                    |u, v| std::array::from_fn(|i| alpha(Vec2::new(u[i], v[i]))),
-                    uv,
-                    Vec2::X,
-                    5
-                )
-                .to_bits(),
-                shell_shadow(alpha, uv, Vec2::X, 5).to_bits()
-            );
+            for texel in [ShadowTexel::Alpha, ShadowTexel::Opaque] {
+                assert_eq!(
+                    shell_shadow_x4(
+                        |u, v| std::array::from_fn(|i| alpha(Vec2::new(u[i], v[i]))),
+                        uv,
+                        Vec2::X,
+                        5,
+                        texel,
+                    )
+                    .to_bits(),
+                    shell_shadow(alpha, uv, Vec2::X, 5, texel).to_bits()
+                );
+            }
         }
     }
 
     #[test]
     fn shadow_adds_alpha_and_handles_edges() {
+        let alpha = ShadowTexel::Alpha;
         // Transparent texels add nothing, opaque ones 1, partial ones their alpha.
-        assert_eq!(shell_shadow(|_| 0.0, Vec2::ZERO, Vec2::X, 6), 0.0);
-        assert_eq!(
-            shell_shadow(
-                |p| if p.x > 0.5 { 1.0 } else { 0.0 },
-                Vec2::ZERO,
-                Vec2::X,
-                4
-            ),
-            2.0
-        );
-        assert_eq!(shell_shadow(|_| 0.25, Vec2::ZERO, Vec2::X, 4), 1.0);
+        assert_eq!(shell_shadow(|_| 0.0, Vec2::ZERO, Vec2::X, 6, alpha), 0.0);
+        let half = |p: Vec2| if p.x > 0.5 { 1.0 } else { 0.0 };
+        assert_eq!(shell_shadow(half, Vec2::ZERO, Vec2::X, 4, alpha), 2.0);
+        assert_eq!(shell_shadow(|_| 0.25, Vec2::ZERO, Vec2::X, 4, alpha), 1.0);
         // Out-of-range and NaN samples are saturated.
-        assert_eq!(shell_shadow(|_| f32::NAN, Vec2::ZERO, Vec2::X, 4), 0.0);
-        assert_eq!(shell_shadow(|_| 7.0, Vec2::ZERO, Vec2::X, 4), 4.0);
+        assert_eq!(
+            shell_shadow(|_| f32::NAN, Vec2::ZERO, Vec2::X, 4, alpha),
+            0.0
+        );
+        assert_eq!(shell_shadow(|_| 7.0, Vec2::ZERO, Vec2::X, 4, alpha), 4.0);
         // No lookups: the sampler is never called.
         assert_eq!(
-            shell_shadow(|_| unreachable!(), Vec2::ZERO, Vec2::X, 0),
+            shell_shadow(|_| unreachable!(), Vec2::ZERO, Vec2::X, 0, alpha),
             0.0
         );
         // Non-finite coordinates are replaced by 0 before sampling.
@@ -269,7 +346,67 @@ mod tests {
             Vec2::new(f32::NAN, 0.0),
             Vec2::splat(f32::INFINITY),
             2,
+            alpha,
         );
+    }
+
+    #[test]
+    fn shadow_counts_opaque_texels_as_the_thesis() {
+        let opaque = ShadowTexel::Opaque;
+        // Any texel with an 8-bit alpha of at least 1 counts in full; alpha 0 and NaN do not.
+        assert_eq!(shell_shadow(|_| 0.25, Vec2::ZERO, Vec2::X, 4, opaque), 4.0);
+        assert_eq!(
+            shell_shadow(|_| 1.0 / 255.0, Vec2::ZERO, Vec2::X, 3, opaque),
+            3.0
+        );
+        assert_eq!(shell_shadow(|_| 0.0, Vec2::ZERO, Vec2::X, 6, opaque), 0.0);
+        assert_eq!(
+            shell_shadow(|_| f32::NAN, Vec2::ZERO, Vec2::X, 6, opaque),
+            0.0
+        );
+        let below = SHADOW_OPAQUE_ALPHA.next_down();
+        assert_eq!(shadow_of_opaque(below), 0.0);
+        assert_eq!(shadow_of_opaque(SHADOW_OPAQUE_ALPHA), 1.0);
+        assert_eq!(shadow_of_opaque(f32::INFINITY), 1.0);
+        assert_eq!(shadow_of_opaque(-1.0), 0.0);
+        assert_eq!(ShadowTexel::default(), ShadowTexel::Alpha);
+    }
+
+    #[test]
+    fn shadow_texels_match_f64() {
+        // Every 8-bit alpha and random ones: the count is exact, the alpha sum within 4 ulps of
+        // 4 per lookup (2e-6 over six lookups).
+        let mut rng = Lcg::new(41);
+        for k in 0..3000u32 {
+            let lookups = k % 7;
+            let alphas: Vec<f32> = (0..lookups)
+                .map(|i| {
+                    if (k + i) % 3 == 0 {
+                        ((k * 7 + i * 31) % 256) as f32 / 255.0
+                    } else {
+                        rng.range(-0.2, 1.2)
+                    }
+                })
+                .collect();
+            let run = |texel| {
+                let mut next = alphas.iter();
+                let sample = |_| next.next().copied().unwrap_or(f32::NAN);
+                shell_shadow(sample, Vec2::ZERO, Vec2::X, lookups, texel)
+            };
+            let (count, sum) = (run(ShadowTexel::Opaque), run(ShadowTexel::Alpha));
+            let transparent = 0.5 / 255.0;
+            let expected_count = alphas
+                .iter()
+                .filter(|&&a| f64::from(a) >= transparent)
+                .count() as f64;
+            let expected_sum: f64 = alphas.iter().map(|&a| f64::from(a).clamp(0.0, 1.0)).sum();
+            assert_close(count, expected_count, 0.0, "opaque count");
+            assert_close(sum, expected_sum, 2e-6, "alpha sum");
+            for &a in &alphas {
+                assert_eq!(shadow_texel(a, ShadowTexel::Opaque), shadow_of_opaque(a));
+                assert_eq!(shadow_texel(a, ShadowTexel::Alpha), shadow_of_alpha(a));
+            }
+        }
     }
 
     #[test]

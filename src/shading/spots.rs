@@ -123,6 +123,41 @@ pub fn stripe_intensity(coordinate: f32, period: f32, width: f32, softness: f32)
     ramp(-dist, -(half + soft), -half)
 }
 
+/// Stripes from the specular value of a light fixed to the object (thesis 3.2.4: "we use the
+/// specular value to add spots and stripes to the objects"): the lobe value `L` of
+/// [`light_spot_intensity`], in `[0, 1]`, cut into periodic bands. Bands are centred on
+/// `L = (k + ½)·period`, `k = 0, 1, …`: [`stripe_intensity`]`(L − period/2, period, width,
+/// softness)`, so the side the light does not reach (`L = 0`) lies in the middle of a gap.
+///
+/// Each band is a ring of equal lobe value around the light's direction: with `exponent` 1 the
+/// rings are equally spaced in `n̂·l̂` (equal areas on a sphere, like latitude bands around the
+/// light), a larger exponent crowds them towards the light. `width` and `softness` are in lobe
+/// units like `period`; a `period` of 1 or more gives at most one band. Conventions of
+/// [`stripe_intensity`] and [`light_spot_intensity`] for the rest.
+#[inline]
+pub fn light_stripe_band(lobe: f32, period: f32, width: f32, softness: f32) -> f32 {
+    stripe_intensity(lobe - 0.5 * period, period, width, softness)
+}
+
+/// [`light_stripe_band`] of the lobe of the light fixed to the object at this normal:
+/// `light_stripe_band(light_spot_intensity(normal, spot_light_dir, exponent), …)`.
+#[inline]
+pub fn light_stripe_intensity(
+    normal: Vec3,
+    spot_light_dir: Vec3,
+    exponent: f32,
+    period: f32,
+    width: f32,
+    softness: f32,
+) -> f32 {
+    light_stripe_band(
+        light_spot_intensity(normal, spot_light_dir, exponent),
+        period,
+        width,
+        softness,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -290,6 +325,62 @@ mod tests {
         }
         assert_eq!(stripe_intensity(f32::NAN, 1.0, 0.2, 0.1), 0.0);
         assert_eq!(stripe_intensity(0.0, 1.0, f32::NAN, f32::NAN), 1.0);
+    }
+
+    #[test]
+    fn light_stripes_match_f64() {
+        let mut rng = Lcg::new(54);
+        let (mut inside, mut ring, mut outside) = (0, 0, 0);
+        for _ in 0..4000 {
+            let (n, l) = (rng.cube(), rng.cube());
+            let exponent = rng.range(0.5, 8.0);
+            let period = rng.range(0.1, 0.5);
+            let width = rng.range(0.0, 0.5 * period);
+            let soft = rng.range(0.01, 0.25 * period);
+            let c = n.as_dvec3().normalize().dot(l.as_dvec3().normalize());
+            let lobe = c.max(0.0).powf(f64::from(exponent));
+            // Distance to the nearest band centre (k + ½)·period, k ≥ 0 … or below 0.
+            let pd = f64::from(period);
+            let k = (lobe / pd - 0.5).round();
+            let dist = (lobe - (k + 0.5) * pd).abs();
+            let half = 0.5 * f64::from(width);
+            let expected = smooth64((half + f64::from(soft) - dist) / f64::from(soft));
+            if expected == 1.0 {
+                inside += 1;
+            } else if expected == 0.0 {
+                outside += 1;
+            } else {
+                ring += 1;
+            }
+            // The lobe's error (a few ulps of the cosine, times p) through the ramp's slope.
+            let lobe_err = 1e-6 + f64::from(exponent) * 1e-6;
+            let tol = 1e-6 + 1.5 / f64::from(soft) * (lobe_err + 1e-6);
+            let got = light_stripe_intensity(n, l, exponent, period, width, soft);
+            assert_close(got, expected, tol, "light stripe");
+            let lobe32 = light_spot_intensity(n, l, exponent);
+            assert_eq!(
+                got.to_bits(),
+                light_stripe_band(lobe32, period, width, soft).to_bits()
+            );
+        }
+        assert!(
+            inside > 100 && ring > 100 && outside > 100,
+            "{inside} {ring} {outside}"
+        );
+        // The unlit side sits mid-gap; the first band is centred on half a period.
+        assert_eq!(light_stripe_band(0.0, 0.25, 0.1, 0.05), 0.0);
+        assert_eq!(light_stripe_band(0.125, 0.25, 0.1, 0.05), 1.0);
+        assert_eq!(light_stripe_band(0.375, 0.25, 0.1, 0.05), 1.0);
+        assert_eq!(light_stripe_band(0.25, 0.25, 0.1, 0.05), 0.0);
+        assert_eq!(
+            light_stripe_intensity(Vec3::Y, -Vec3::Y, 1.0, 0.25, 0.1, 0.05),
+            0.0
+        );
+        assert_eq!(
+            light_stripe_intensity(Vec3::ZERO, Vec3::Y, 1.0, 0.25, 0.1, 0.05),
+            0.0
+        );
+        assert_eq!(light_stripe_band(0.5, f32::NAN, 0.1, 0.05), 0.0);
     }
 
     #[test]
