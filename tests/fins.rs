@@ -252,3 +252,44 @@ fn fin_fur_is_as_bright_as_the_shell_fur_beside_it() {
         );
     }
 }
+
+#[test]
+fn neighbouring_fins_join_without_a_hard_edge() {
+    // Where one fin ends and the next begins (the same skin point), both give the corner the
+    // same position, texture coordinate and opacity, so the fur runs on across the join: no
+    // straight panel edge (the thesis's windows with a fin texture offset per edge showed a
+    // saw-tooth of light panels on the torus's top edge). `u` may jump by a whole number of
+    // tiles only where a loop closes.
+    for name in ["gravity", "torus", "leg"] {
+        let prepared = PreparedScene::new(&renders_scene(name)).expect("prepares");
+        let (vertices, triangles) = prepared.fin_quads_at(prepared.scene().time);
+        let quads = triangles.len() / 2;
+        assert!(quads > 10, "{name}: {quads} fins");
+        let mut joins = 0;
+        for k in 0..quads.saturating_sub(1) {
+            let (this, next) = (&vertices[4 * k..4 * k + 4], &vertices[4 * k + 4..4 * k + 8]);
+            // Corners: 0 root of the first end, 1 root of the second, 2 its top, 3 the first's top.
+            if this[1].0 != next[0].0 {
+                continue;
+            }
+            joins += 1;
+            for (end, start) in [(&this[1], &next[0]), (&this[2], &next[3])] {
+                assert_eq!(end.0, start.0, "{name}: fin {k}: positions part");
+                assert_eq!(end.1.fade, start.1.fade, "{name}: fin {k}: opacity steps");
+                let du = end.1.uv.x - start.1.uv.x;
+                assert!(
+                    du == 0.0 || (du.round() == du && du != 0.0),
+                    "{name}: fin {k}: u jumps by {du}"
+                );
+                assert_eq!(end.1.uv.y, start.1.uv.y, "{name}: fin {k}: v differs");
+            }
+        }
+        // Nearly every fin continues the one before it (chains end only at branches, borders
+        // and where a loop closes).
+        assert!(
+            joins * 10 >= quads * 8,
+            "{name}: only {joins} joins among {quads} fins"
+        );
+        eprintln!("{name}: {joins} joins among {quads} fins");
+    }
+}

@@ -800,11 +800,40 @@ impl PreparedScene {
             } else {
                 1.0 / tile
             };
+            // How squarely each fin faces the eye; a fin's opacity runs linearly between the
+            // means at its two ends, shared with its neighbours, so that fins meeting at an angle
+            // show no step in opacity where they join.
+            let facing: Vec<f32> = chain
+                .links
+                .iter()
+                .map(|l| match (vertex(l.from), vertex(l.to)) {
+                    (Some(a), Some(b)) => {
+                        let x = (b.position - a.position).normalize_or_zero();
+                        let up = (a.normal + b.normal).normalize_or_zero();
+                        let z = (up - x * up.dot(x)).normalize_or_zero();
+                        let middle = place((a.position + b.position) * 0.5);
+                        mesh::fins::fin_facing(x, z, eye - middle)
+                    }
+                    _ => 0.0,
+                })
+                .collect();
+            let count = facing.len();
+            let end_fade = |k: usize, next: bool| {
+                let neighbour = match (next, chain.closed) {
+                    (true, _) if k + 1 < count => Some(k + 1),
+                    (true, true) => Some(0),
+                    (false, _) if k > 0 => Some(k - 1),
+                    (false, true) => Some(count - 1),
+                    _ => None,
+                };
+                neighbour.map_or(facing[k], |j| 0.5 * (facing[k] + facing[j]))
+            };
             let mut u = 0.0f32;
-            for link in &chain.links {
+            for (k, link) in chain.links.iter().enumerate() {
                 let (Some(a), Some(b)) = (vertex(link.from), vertex(link.to)) else {
                     continue;
                 };
+                let (from_fade, to_fade) = (end_fade(k, false), end_fade(k, true));
                 let along = b.position - a.position;
                 let length = along.length();
                 let (u0, u1) = (u, u + length * per_length);
@@ -841,10 +870,10 @@ impl PreparedScene {
                 let (a_top, a_length) = top_of(a);
                 let (b_top, b_length) = top_of(b);
                 let corners = [
-                    (a.position, a, Vec2::new(u0, 0.0), 1.0),
-                    (b.position, b, Vec2::new(u1, 0.0), 1.0),
-                    (b_top, b, Vec2::new(u1, 1.0), b_length),
-                    (a_top, a, Vec2::new(u0, 1.0), a_length),
+                    (a.position, a, Vec2::new(u0, 0.0), 1.0, from_fade),
+                    (b.position, b, Vec2::new(u1, 0.0), 1.0, to_fade),
+                    (b_top, b, Vec2::new(u1, 1.0), b_length, to_fade),
+                    (a_top, a, Vec2::new(u0, 1.0), a_length, from_fade),
                 ];
                 // The fins' self-shadow (3.2.2 on the side view): the lookups run from each point
                 // towards the light over the fin's full height, in the fin's own texture, so the
@@ -856,10 +885,10 @@ impl PreparedScene {
                     z * height,
                 );
                 let base = vertices.len() as u32;
-                for (p, root, uv, length) in corners {
+                for (p, root, uv, length, facing) in corners {
                     let p = place(p);
                     let fade = match self.scene.fur.fin_selection {
-                        FinSelectionSetting::Outline => mesh::fins::fin_facing(x, z, eye - p),
+                        FinSelectionSetting::Outline => facing,
                         FinSelectionSetting::AngleWindows => {
                             fin_fade(&self.scene.fur.fin_windows, eye - p, root.normal)
                         }

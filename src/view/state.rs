@@ -262,7 +262,18 @@ mod tests {
 
     #[test]
     fn spots_toggle_off_and_back_and_scenes_without_spots_get_examples() {
+        // The embedded torus has the thesis's 12 spots: off, then back as they were.
         let mut s = state();
+        let own = s.scene.spots.clone();
+        assert_eq!(own.len(), 12);
+        s.apply(Action::ToggleSpots, 480.0);
+        assert!(s.scene.spots.is_empty());
+        s.apply(Action::ToggleSpots, 480.0);
+        assert_eq!(s.scene.spots, own);
+        // A scene without spots gets two examples.
+        let mut bare = Scene::embedded_default().expect("default");
+        bare.spots.clear();
+        let mut s = ViewState::new(bare, true);
         assert!(s.scene.spots.is_empty());
         s.apply(Action::ToggleSpots, 480.0);
         assert_eq!(s.scene.spots.len(), 2);
@@ -317,6 +328,6 @@ mod tests {
         assert!(same_bake(&s.scene, &s.initial));
         s.apply(Action::ResetCamera, 480.0);
         assert_eq!(s.scene.camera, s.initial.camera);
-        assert!(s.describe().contains("shells 30"), "{}", s.describe());
+        assert!(s.describe().contains("shells 40"), "{}", s.describe());
     }
 }
