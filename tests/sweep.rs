@@ -92,7 +92,7 @@ fn a_sweep_writes_csv_renders_sheet_and_plot() {
     let with_value = dir.join("with-value.png");
     let scene = dir.join("eight.toml");
     let text =
-        pelage::scene::DEFAULT_SCENE.replace("number_of_shells = 30", "number_of_shells = 8");
+        pelage::scene::DEFAULT_SCENE.replace("number_of_shells = 40", "number_of_shells = 8");
     assert_ne!(
         text,
         pelage::scene::DEFAULT_SCENE,
@@ -164,7 +164,7 @@ fn bad_parameters_are_refused_before_rendering() {
     for (param, needle) in [
         ("number_of_shells=10,0", "number_of_shells"),
         ("fur.not_a_key=3", "not_a_key"),
-        ("number_of_spots=5", "number_of_spots"),
+        ("number_of_spots=13", "number_of_spots"),
         ("no_equals_sign", "NAME=V1"),
         ("camera_distance=-3", "camera_distance"),
     ] {
