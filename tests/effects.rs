@@ -252,3 +252,58 @@ fn a_negative_model_difference_thins_the_object_inside_its_surface() {
     };
     assert!(covered(&thin) < covered(&thick));
 }
+
+/// Median over columns 200..440 of the first row from the top that is not background.
+fn fur_top_row(image: &pelage::render::RenderedImage) -> u32 {
+    let w = image.width as usize;
+    let px = |x: usize, y: usize| &image.rgba8[(y * w + x) * 4..(y * w + x) * 4 + 3];
+    let background = px(0, 0).to_vec();
+    let mut rows: Vec<u32> = (200..440)
+        .map(|x| {
+            (0..image.height as usize)
+                .find(|&y| {
+                    px(x, y)
+                        .iter()
+                        .zip(&background)
+                        .map(|(a, b)| (i32::from(*a) - i32::from(*b)).abs())
+                        .sum::<i32>()
+                        > 12
+                })
+                .unwrap_or(image.height as usize) as u32
+        })
+        .collect();
+    rows.sort_unstable();
+    rows[rows.len() / 2]
+}
+
+#[test]
+fn without_the_pull_the_bent_fur_stands_as_tall_as_the_unbent() {
+    // Thesis figure 3.16: animating "solely in the fragment shader" leaves every layer at its
+    // full height while its texture moves sideways, so the strands stretch; the pull along
+    // −normal (3.3) lowers the bent fur. The torus's near top seen from the side.
+    let stretched = scene("excessive-bending", 640, 480);
+    assert!(stretched.wind.as_ref().is_some_and(|w| !w.keep_length));
+    let mut kept = stretched.clone();
+    if let Some(w) = kept.wind.as_mut() {
+        w.keep_length = true;
+    }
+    let mut still = stretched.clone();
+    still.wind = None;
+    let top = |s: &pelage::scene::Scene| {
+        fur_top_row(
+            &PreparedScene::new(s)
+                .expect("prepares")
+                .render(64)
+                .expect("renders"),
+        ) as i32
+    };
+    let (still, kept, stretched) = (top(&still), top(&kept), top(&stretched));
+    assert!(
+        (stretched - still).abs() <= 4,
+        "stretched fur top at row {stretched}, unbent at {still}"
+    );
+    assert!(
+        kept - still >= 8,
+        "the pulled-back fur's top (row {kept}) is not below the unbent's ({still})"
+    );
+}

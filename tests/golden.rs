@@ -231,6 +231,7 @@ golden! {
     cow => "cow",
     spots => "spots",
     wind => "wind" at times [0.0, 0.5, 1.5],
+    excessive_bending => "excessive-bending",
     burn => "burn" at times [0.0, 1.0, 3.0, 6.0, 10.0],
     distance => "distance" at distances [24.0, 17.0, 12.0, 9.0],
     painted_length => "painted-length",

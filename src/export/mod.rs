@@ -333,7 +333,7 @@ pub fn scene_values(s: &Scene) -> Value {
         "wind": s.wind.as_ref().map(|w| json!({
             "direction": w.direction, "strength": w.strength, "frequency": w.frequency,
             "elasticity": w.elasticity, "max_bend": w.max_bend,
-            "tangent_fraction": w.tangent_fraction,
+            "tangent_fraction": w.tangent_fraction, "keep_length": w.keep_length,
         })),
         "burn": s.burn.as_ref().map(|b| json!({
             "matches": b.matches, "start": b.start, "high_exponent": b.high_exponent,
@@ -421,6 +421,7 @@ fn scene_json(
             "direction_unit": direction,
             "force": force,
             "tangent_fraction": w.tangent_fraction,
+            "keep_length": w.keep_length,
         })
     });
     let lod = prepared.level_of_detail_at(time).map(|l| {

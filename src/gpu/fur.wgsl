@@ -25,7 +25,8 @@ struct FrameUniforms {
     offset: vec4<f32>,         // xyz: the object's offset on its path at this instant (0 at rest)
     lean: vec4<f32>,           // xyz: the shared lean (gravity + spring lag, world), w: 1 with a lean
     maps: vec4<u32>,           // x: maps present (1 length, 2 density, 4 direction, 8 colour);
-                               // y, z: address along u, v (0 clamp, 1 wrap)
+                               // y, z: address along u, v (0 clamp, 1 wrap); w: 1 when the
+                               // layers are not pulled back (wind.keep_length = false)
 }
 
 struct LayerUniforms {
@@ -776,7 +777,12 @@ fn vs_shell(v: MeshVertex) -> FurVaryings {
     if (has_wind) {
         wind_ts = to_tangent_space(direction * force, tf);
     }
-    let p = v.position + v.normal * offset + vertex_pull(displacement, v.normal) + frame.offset.xyz;
+    // maps.w = 1: the layers are not pulled back (wind.keep_length = false, figure 3.16).
+    var pull = vertex_pull(displacement, v.normal);
+    if (frame.maps.w == 1u) {
+        pull = vec3<f32>(0.0);
+    }
+    let p = v.position + v.normal * offset + pull + frame.offset.xyz;
     let change = shadow_change(light, v.frame_normal, strand_height - offset);
     var out: FurVaryings;
     out.clip = frame.view_proj * vec4<f32>(p, 1.0);

@@ -1003,7 +1003,13 @@ fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
         | u32::from(maps.colour.is_some()) << 3;
     let wrap =
         |a: crate::scene::MapAddressSetting| u32::from(a == crate::scene::MapAddressSetting::Wrap);
-    for v in [present, wrap(s.maps.address[0]), wrap(s.maps.address[1]), 0] {
+    let stretch = u32::from(s.wind.as_ref().is_some_and(|w| !w.keep_length));
+    for v in [
+        present,
+        wrap(s.maps.address[0]),
+        wrap(s.maps.address[1]),
+        stretch,
+    ] {
         bytes.extend(v.to_le_bytes());
     }
     bytes

@@ -125,6 +125,9 @@ struct Bending {
     /// The lean shared by every vertex (gravity + spring lag × response), world space; `None`
     /// when the scene has neither gravity, motion nor a direction map (the thesis's wind alone).
     lean: Option<Vec3>,
+    /// Whether a bent layer is pulled back along −normal to keep the strands' length (thesis
+    /// 3.3); `false` only with `wind.keep_length = false` (figure 3.16).
+    keep_length: bool,
 }
 
 impl Bending {
@@ -139,7 +142,21 @@ impl Bending {
             });
             gravity + lag
         });
-        Bending { wind, lean }
+        Bending {
+            wind,
+            lean,
+            keep_length: s.wind.as_ref().is_none_or(|w| w.keep_length),
+        }
+    }
+
+    /// The part of `displacement` the vertex stage applies: the pull back along the normal
+    /// ([`crate::shading::vertex_pull`]), or nothing when the length is not kept.
+    fn pull(&self, displacement: Vec3, normal: Vec3) -> Vec3 {
+        if self.keep_length {
+            crate::shading::vertex_pull(displacement, normal)
+        } else {
+            Vec3::ZERO
+        }
     }
 
     /// Whether anything moves the layers (the reverse lookup is needed).
@@ -628,7 +645,7 @@ impl PreparedScene {
                     } else {
                         Vec3::ZERO
                     };
-                    let pull = crate::shading::vertex_pull(displacement, v.normal);
+                    let pull = bending.pull(displacement, v.normal);
                     let p = place(v.position + v.normal * offset + pull);
                     let change = crate::shading::shadow_change(
                         light,
@@ -865,6 +882,12 @@ impl PreparedScene {
                     let height = self.fin_height * length;
                     let bend =
                         bending.displacement(bending.lean_at(maps, v), v.normal, 1.0, height);
+                    // Without the pull (figure 3.16) the top edge moves only sideways.
+                    let bend = if bending.keep_length {
+                        bend
+                    } else {
+                        bend - crate::shading::vertex_pull(bend, v.normal)
+                    };
                     (v.position + v.normal * height + bend, length)
                 };
                 let (a_top, a_length) = top_of(a);

@@ -659,6 +659,10 @@ pub struct WindSettings {
     pub max_bend: f32,
     /// How much of the wind the strand tangents take at the tips (thesis 3.3.1).
     pub tangent_fraction: f32,
+    /// Whether the layers are pulled back along −normal as they bend, so the strands keep
+    /// their length (thesis 3.3; default `true`). `false` does the animation "solely in the
+    /// fragment shader", which the thesis shows stretching the strands (figure 3.16).
+    pub keep_length: bool,
 }
 
 impl WindSettings {
@@ -691,6 +695,7 @@ impl Default for WindSettings {
             elasticity: 3.0,
             max_bend: 0.6,
             tangent_fraction: 0.5,
+            keep_length: true,
         }
     }
 }
