@@ -21,25 +21,86 @@ fn error(path: &Path, message: impl std::fmt::Display) -> OutputError {
     }
 }
 
-/// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
+/// The longest file name (bytes) an output may have: `NAME_MAX` of the common file systems.
+pub const MAX_FILE_NAME_BYTES: usize = 255;
+
+/// How many symbolic links [`write_atomic`] follows before it gives up (Linux's `MAXSYMLINKS`).
+const MAX_SYMLINKS: usize = 40;
+
+/// Whether `path` names standard output (`-o -`).
+pub fn is_stdout(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// The file a write to `path` lands in: symbolic links followed (a relative link from the folder
+/// holding it), so that a link is kept and its target replaced. The last target need not exist.
+pub fn resolve_output(path: &Path) -> Result<PathBuf, OutputError> {
+    let mut current = path.to_path_buf();
+    for _ in 0..MAX_SYMLINKS {
+        match std::fs::symlink_metadata(&current) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&current).map_err(|e| error(path, e))?;
+                current = if target.is_absolute() {
+                    target
+                } else {
+                    current
+                        .parent()
+                        .map_or_else(|| target.clone(), |dir| dir.join(&target))
+                };
+            }
+            _ => return Ok(current),
+        }
+    }
+    Err(error(path, "too many levels of symbolic links"))
+}
+
+/// Writes `bytes` to `path` so that nothing is left half written and nothing is destroyed:
+/// - `-` writes to standard output (a reader that has gone away is not an error);
+/// - a symbolic link is followed and its target replaced, the link kept;
+/// - an existing path that is not a regular file (a FIFO, `/dev/null`, a terminal) is written
+///   through, never replaced; a folder is refused;
+/// - otherwise the bytes go to a short-named temporary file in the same folder
+///   (`.pelage-PID-N.tmp`, whatever the length of the final name), which is then renamed over
+///   the path: an error or an interrupt never leaves a truncated file that looks complete.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let dir = match path.parent() {
+    if is_stdout(path) {
+        let mut out = std::io::stdout().lock();
+        return match out.write_all(bytes).and_then(|()| out.flush()) {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(error(path, e)),
+            _ => Ok(()),
+        };
+    }
+    let target = resolve_output(path)?;
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => return Err(error(path, "is a folder")),
+        Ok(m) if !m.is_file() => {
+            // A device or FIFO: the bytes go through it; renaming over it would replace it.
+            let mut file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(|e| error(path, e))?;
+            return file.write_all(bytes).map_err(|e| error(path, e));
+        }
+        _ => {}
+    }
+    let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| error(path, "not a file name"))?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    if target.file_name().is_none() {
+        return Err(error(path, "not a file name"));
+    }
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(".pelage-{}-{n}.tmp", std::process::id()));
     let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
         file.write_all(bytes)?;
         file.sync_all()?;
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
     result.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);

@@ -5,7 +5,7 @@ mod common;
 use common::{pelage, scratch};
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
+use std::process::{Command, Output};
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
@@ -268,4 +268,102 @@ fn diagram_refuses_bad_figures_and_resolutions() {
         "--strand-resolution",
     );
     assert!(!out.exists(), "nothing is written for refused input");
+}
+
+#[test]
+fn outputs_write_through_devices_links_and_standard_output_and_never_clobber() {
+    let dir = scratch("outputs");
+    let scene = write(
+        &dir,
+        "small.toml",
+        "[image]\nwidth = 32\nheight = 24\n[fur]\nnumber_of_strands = 50\n",
+    );
+    let scene = scene.to_str().expect("path");
+    let reference = dir.join("reference.png");
+    let o = pelage(&["render", scene, "-o", reference.to_str().expect("path")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let png = std::fs::read(&reference).expect("reference");
+
+    // `-o -`: the PNG on standard output, no file named `-`.
+    let o = Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .current_dir(&dir)
+        .args(["render", scene, "-o", "-"])
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(o.stdout, png);
+    assert!(!dir.join("-").exists());
+
+    // A symbolic link: its target is replaced, the link stays a link.
+    let target = dir.join("target.png");
+    std::fs::write(&target, b"old").expect("target");
+    let link = dir.join("link.png");
+    std::os::unix::fs::symlink("target.png", &link).expect("symlink");
+    let o = pelage(&["render", scene, "-o", link.to_str().expect("path")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .expect("link")
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(std::fs::read(&target).expect("target"), png);
+
+    // A device is written through, not replaced.
+    let o = pelage(&["render", scene, "-o", "/dev/null"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let null = std::fs::metadata("/dev/null").expect("/dev/null");
+    assert!(!null.is_file(), "/dev/null is still a device");
+
+    // A name longer than a file system allows is refused before any work; a long valid one
+    // is written (the temporary name is short).
+    let long = dir.join("n".repeat(300) + ".png");
+    refused(
+        &["render", scene, "-o", long.to_str().expect("path")],
+        "longer than the 255",
+    );
+    let valid = dir.join("v".repeat(246) + ".png");
+    let o = pelage(&["render", scene, "-o", valid.to_str().expect("path")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&valid).expect("long name"), png);
+    // Nothing else was left behind.
+    let hidden = std::fs::read_dir(&dir)
+        .expect("dir")
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .count();
+    assert_eq!(hidden, 0);
+}
+
+#[test]
+fn a_closed_pipe_is_not_a_bug() {
+    let dir = scratch("pipe");
+    let scene = write(
+        &dir,
+        "small.toml",
+        "[image]\nwidth = 32\nheight = 24\n[fur]\nnumber_of_strands = 50\n",
+    );
+    let png = dir.join("a.png");
+    let o = pelage(&[
+        "render",
+        scene.to_str().expect("path"),
+        "-o",
+        png.to_str().expect("path"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let png = png.to_str().expect("path");
+    for _ in 0..5 {
+        // The reader closes at once: whatever pelage manages to write, it exits as compare
+        // does (0, the images are equal), never as a bug (101).
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(["compare", png, png, "--json"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("spawns");
+        drop(child.stdout.take());
+        let o = child.wait_with_output().expect("waits");
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("internal error"), "{}", stderr(&o));
+    }
 }

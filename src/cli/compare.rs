@@ -59,9 +59,9 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
     if args.json {
         let json = serde_json::to_string_pretty(&comparison)
             .map_err(|e| Failure::other(format!("JSON: {e}")))?;
-        println!("{json}");
+        super::say(json)?;
     } else {
-        println!("{comparison}");
+        super::say(&comparison)?;
     }
     if comparison.passed() {
         Ok(())

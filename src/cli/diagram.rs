@@ -59,7 +59,7 @@ pub fn run(args: DiagramArgs) -> Result<(), Failure> {
         let image = draw_diagram(figure, &options)
             .map_err(|e| Failure::bad_input(format!("figure {}: {e}", figure.number())))?;
         write_png(path, image.width(), image.height(), image.as_raw())?;
-        println!("{}", path.display());
+        super::say(path.display())?;
         Ok(())
     };
     match args.figure {

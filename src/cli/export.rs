@@ -34,11 +34,11 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
         result
     })??;
     folder.commit()?;
-    println!(
+    super::say(format!(
         "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/)",
         args.output.display(),
         summary.files.len()
-    );
+    ))?;
     Ok(())
 }
 

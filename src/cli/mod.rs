@@ -112,6 +112,20 @@ impl From<RenderError> for Failure {
     }
 }
 
+/// Prints one line on standard output. A reader that has gone away (a closed pipe, as in
+/// `pelage compare a.png b.png | head -1`) is normal for a command-line tool: the rest of the
+/// output is dropped and the command ends with its own status; any other write error is one.
+pub fn say(text: impl std::fmt::Display) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{text}").and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure::other(format!("standard output: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The name errors use for the scene of `args`.
 pub fn scene_name(args: &CommonArgs) -> String {
     match &args.scene {

@@ -77,16 +77,29 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
 /// Refuses an output path that cannot take a file, before any work: a folder, or a file in a
 /// folder that does not exist.
 fn check_output_file(path: &Path) -> Result<(), Failure> {
+    if pelage::output::is_stdout(path) {
+        return Ok(());
+    }
+    let path =
+        &pelage::output::resolve_output(path).map_err(|e| Failure::bad_input(format!("-o {e}")))?;
     if path.is_dir() {
         return Err(Failure::bad_input(format!(
             "-o {}: is a folder (a PNG file name is expected; use --frames for a folder)",
             path.display()
         )));
     }
-    if path.file_name().is_none() {
+    let Some(name) = path.file_name() else {
         return Err(Failure::bad_input(format!(
             "-o {}: not a file name",
             path.display()
+        )));
+    };
+    if name.len() > pelage::output::MAX_FILE_NAME_BYTES {
+        return Err(Failure::bad_input(format!(
+            "-o {}: the file name is {} bytes, longer than the {} a file system allows",
+            path.display(),
+            name.len(),
+            pelage::output::MAX_FILE_NAME_BYTES
         )));
     }
     let parent = parent_of(path);
@@ -145,6 +158,12 @@ fn render_animation(
     let keep_name = gif_inside
         .and_then(|g| g.file_name())
         .map(|n| n.to_string_lossy().into_owned());
+    if let Some(name) = keep_name.as_deref().filter(|n| is_frame_file(n)) {
+        return Err(Failure::bad_input(format!(
+            "--animation {name}: inside the frame folder it would overwrite a frame; choose \
+             another name"
+        )));
+    }
     let fps = args.fps;
     let keep_for_gif = args.animation.is_some();
     let name = scene_name(&args.common);

@@ -1,8 +1,8 @@
 //! Output folders that never look complete when they are not.
 //!
 //! A folder of outputs (an animation's frames, an export) is written into a hidden temporary
-//! sibling (`.NAME.PID.tmp`) and renamed to its name only once every file is in it. An existing
-//! output folder is replaced only when it holds nothing but what this command writes (a
+//! sibling (`.pelage-PID-staged.tmp`) and renamed to its name only once every file is in it. An
+//! existing output folder is replaced only when it holds nothing but what this command writes (a
 //! previous run's output); any other existing folder is refused before work starts. On an error
 //! the temporary folder is removed; an interrupted process leaves at most a hidden `.tmp` folder.
 
@@ -30,13 +30,17 @@ impl StagedFolder {
     /// Checks the target can be (re)placed and creates the temporary folder beside it.
     pub fn create(target: &Path, rule: EntryRule) -> Result<StagedFolder, Failure> {
         let other = |m: String| Failure::other(format!("{}: {m}", target.display()));
-        let name = target
-            .file_name()
-            .ok_or_else(|| {
-                Failure::bad_input(format!("-o {}: not a folder name", target.display()))
-            })?
-            .to_string_lossy()
-            .into_owned();
+        let name = target.file_name().ok_or_else(|| {
+            Failure::bad_input(format!("-o {}: not a folder name", target.display()))
+        })?;
+        if name.len() > pelage::output::MAX_FILE_NAME_BYTES {
+            return Err(Failure::bad_input(format!(
+                "-o {}: the name is {} bytes, longer than the {} a file system allows",
+                target.display(),
+                name.len(),
+                pelage::output::MAX_FILE_NAME_BYTES
+            )));
+        }
         if target.exists() {
             replaceable(target, &rule)?;
         }
@@ -47,7 +51,8 @@ impl StagedFolder {
                 parent.display()
             ))
         })?;
-        let temporary = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+        // A short name whatever the target's length (file systems allow 255 bytes a name).
+        let temporary = parent.join(format!(".pelage-{}-staged.tmp", std::process::id()));
         if temporary.exists() {
             let _ = std::fs::remove_dir_all(&temporary);
         }
