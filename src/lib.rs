@@ -16,6 +16,7 @@ pub mod export;
 pub mod fur;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod input;
 pub mod limits;
 pub mod mesh;
 pub mod output;

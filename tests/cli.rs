@@ -367,3 +367,83 @@ fn a_closed_pipe_is_not_a_bug() {
         assert!(!stderr(&o).contains("internal error"), "{}", stderr(&o));
     }
 }
+
+/// Runs pelage with `args`, killing it (and failing) if it has not finished in 30 s: a FIFO
+/// opened for reading would block forever.
+fn pelage_within_30s(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawns");
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("waits").is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("pelage {args:?} still running after 30 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("output")
+}
+
+#[test]
+fn pipes_devices_and_folders_are_refused_as_inputs_before_they_are_opened() {
+    let dir = scratch("inputs");
+    let fifo = dir.join("fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let fifo = fifo.to_str().expect("path");
+    let folder = dir.to_str().expect("path");
+    let png = dir.join("a.png");
+    let o = pelage(&[
+        "render",
+        write(&dir, "s.toml", "[image]\nwidth = 16\nheight = 12\n")
+            .to_str()
+            .expect("path"),
+        "-o",
+        png.to_str().expect("path"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let png = png.to_str().expect("path");
+    let shard = dir.join("shard");
+    std::fs::create_dir_all(&shard).expect("shard");
+    let made = Command::new("mkfifo")
+        .arg(shard.join("results.csv"))
+        .status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let merged = dir.join("merged");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["render", fifo, "-o", png],
+        vec!["render", "/dev/zero", "-o", png],
+        vec!["render", folder, "-o", png],
+        vec!["compare", fifo, png],
+        vec!["compare", png, "/dev/zero"],
+        vec![
+            "sweep",
+            "/dev/zero",
+            "--param",
+            "number_of_shells=2",
+            "-o",
+            folder,
+        ],
+        vec!["sweep", fifo, "--param", "number_of_shells=2", "-o", folder],
+        vec![
+            "sweep-merge",
+            "-o",
+            merged.to_str().expect("path"),
+            shard.to_str().expect("path"),
+        ],
+    ];
+    for args in cases {
+        let o = pelage_within_30s(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("not a regular file") || err.contains("is a folder"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}

@@ -30,9 +30,7 @@ pub struct CompareArgs {
 }
 
 fn load(path: &Path) -> Result<image::RgbaImage, Failure> {
-    image::open(path)
-        .map(|i| i.into_rgba8())
-        .map_err(|e| Failure::bad_input(format!("{}: cannot read the image: {e}", path.display())))
+    pelage::input::read_image(path, "image").map_err(|e| Failure::bad_input(e.to_string()))
 }
 
 pub fn run(args: CompareArgs) -> Result<(), Failure> {

@@ -179,9 +179,8 @@ pub fn load_scene(args: &CommonArgs) -> Result<Scene, Failure> {
 pub fn scene_source(args: &CommonArgs) -> Result<(String, String, PathBuf), Failure> {
     match &args.scene {
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                Failure::bad_input(format!("{}: cannot read the scene: {e}", path.display()))
-            })?;
+            let text = pelage::input::read_text(path, pelage::scene::MAX_SCENE_BYTES, "scene")
+                .map_err(|e| Failure::bad_input(e.to_string()))?;
             let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
             Ok((text, path.display().to_string(), dir))
         }

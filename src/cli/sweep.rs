@@ -164,12 +164,9 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
     let mut files = Vec::new();
     for dir in &args.shards {
         let path = dir.join("results.csv");
-        let text = std::fs::read_to_string(&path).map_err(|e| {
-            Failure::bad_input(format!(
-                "{}: cannot read the shard's results: {e}",
-                path.display()
-            ))
-        })?;
+        let text =
+            pelage::input::read_text(&path, pelage::input::MAX_TABLE_BYTES, "shard's results")
+                .map_err(|e| Failure::bad_input(e.to_string()))?;
         files.push((path.display().to_string(), text));
     }
     let (names, rows) = sweep::merge_results(&files).map_err(|e| Failure::bad_input(e.0))?;
@@ -185,8 +182,9 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
             .find(|p| p.is_file())
             && !same_file(&source, &target)
         {
-            let bytes = std::fs::read(&source)
-                .map_err(|e| Failure::other(format!("{}: cannot read: {e}", source.display())))?;
+            let bytes =
+                pelage::input::read(&source, pelage::input::MAX_IMAGE_FILE_BYTES, "point image")
+                    .map_err(|e| Failure::bad_input(e.to_string()))?;
             pelage::output::write_atomic(&target, &bytes)
                 .map_err(|e| Failure::other(e.to_string()))?;
         }
@@ -301,7 +299,7 @@ fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(),
     let mut cells = Vec::new();
     for row in rows {
         let path = dir.join(point_file(row.point));
-        let Ok(image) = image::open(&path) else {
+        let Ok(image) = pelage::input::read_image(&path, "point image") else {
             eprintln!(
                 "warning: {}: missing or unreadable, left off the contact sheet",
                 path.display()
@@ -314,7 +312,7 @@ fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(),
             .map(|(n, v)| format!("{n}={v}"))
             .collect();
         label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
-        cells.push((image.to_rgba8(), label));
+        cells.push((image, label));
     }
     if let Some(sheet) = sweep::contact_sheet(&cells) {
         super::write_png(

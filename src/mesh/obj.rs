@@ -27,7 +27,7 @@
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
@@ -50,11 +50,13 @@ pub struct LoadedMesh {
 /// infinite ([`MeshError::NonFinite`], with the line and 1-based OBJ vertex number).
 pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
     let summary = scan_obj(path)?;
-    let file = File::open(path).map_err(|source| MeshError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    load_checked(path, &mut BufReader::new(file), summary.warnings)
+    // Checked again: the scan's check does not hold for a file swapped since.
+    let file = open_checked(path, crate::limits::MAX_OBJ_BYTES, "file size in bytes")?;
+    load_checked(
+        path,
+        &mut BufReader::new(file.take(crate::limits::MAX_OBJ_BYTES)),
+        summary.warnings,
+    )
 }
 
 /// Loads OBJ text held in memory, as [`load_obj`] loads a file; `name` names it in errors.
@@ -149,7 +151,8 @@ fn load_checked(
 /// The error for a non-finite position at merged index `vertex`: re-reads the file to find the
 /// offending `v` line (the merged index is not the file's numbering once tobj re-indexes).
 fn non_finite(path: &Path, vertex: usize, p: Vec3) -> MeshError {
-    let found = std::fs::read_to_string(path).ok().and_then(|text| {
+    let text = crate::input::read_text(path, crate::limits::MAX_OBJ_BYTES, "OBJ file");
+    let found = text.ok().and_then(|text| {
         let mut number = 0;
         for (line, l) in text.lines().enumerate() {
             let mut words = l.split_whitespace();
@@ -234,7 +237,8 @@ const OTHER_STATEMENTS: &[&str] = &[
 /// Longest line accepted in an OBJ or MTL file, bytes.
 const MAX_LINE_BYTES: usize = 1 << 20;
 
-/// Opens `path` for a line scan after checking it is a regular file of at most `max_bytes`.
+/// Opens `path` for a line scan after checking it is a regular file of at most `max_bytes`
+/// ([`crate::input::check_regular_file`]).
 fn open_checked(path: &Path, max_bytes: u64, what: &'static str) -> Result<File, MeshError> {
     let io = |source| MeshError::Io {
         path: path.to_path_buf(),

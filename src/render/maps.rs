@@ -57,14 +57,19 @@ fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
         path: path.display().to_string(),
         message,
     };
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| fail(format!("cannot read the map: {e}")))?
-        .with_guessed_format()
-        .map_err(|e| fail(format!("cannot read the map: {e}")))?;
-    if reader.format() != Some(image::ImageFormat::Png) {
+    // A regular file of bounded size (a FIFO or device would hang or never end the read).
+    let bytes = crate::input::read(path, crate::input::MAX_IMAGE_FILE_BYTES, "map")
+        .map_err(|e| fail(e.message))?;
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .map_err(|e| fail(format!("cannot read the map: {e}")))
+    };
+    let checked = reader()?;
+    if checked.format() != Some(image::ImageFormat::Png) {
         return Err(fail("not a PNG file".into()));
     }
-    let (width, height) = reader
+    let (width, height) = checked
         .into_dimensions()
         .map_err(|e| fail(format!("not a readable PNG: {e}")))?;
     if width == 0 || height == 0 || width > MAX_MAP_SIDE || height > MAX_MAP_SIDE {
@@ -72,10 +77,7 @@ fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
             "the map is {width}×{height}; each side must be 1..={MAX_MAP_SIDE}"
         )));
     }
-    let image = image::ImageReader::open(path)
-        .map_err(|e| fail(format!("cannot read the map: {e}")))?
-        .with_guessed_format()
-        .map_err(|e| fail(format!("cannot read the map: {e}")))?
+    let image = reader()?
         .decode()
         .map_err(|e| fail(format!("not a readable PNG: {e}")))?
         .to_rgba8();

@@ -875,22 +875,8 @@ impl Scene {
             line,
             message,
         };
-        let meta = std::fs::metadata(path)
-            .map_err(|e| error(None, format!("cannot read the scene: {e}")))?;
-        if !meta.is_file() {
-            return Err(error(None, "not a regular file".into()));
-        }
-        if meta.len() > MAX_SCENE_BYTES {
-            return Err(error(
-                None,
-                format!(
-                    "the scene is {} bytes, more than the limit of {MAX_SCENE_BYTES}",
-                    meta.len()
-                ),
-            ));
-        }
-        let bytes =
-            std::fs::read(path).map_err(|e| error(None, format!("cannot read the scene: {e}")))?;
+        let bytes = crate::input::read(path, MAX_SCENE_BYTES, "scene")
+            .map_err(|e| error(None, e.message))?;
         let text = String::from_utf8(bytes).map_err(|e| {
             let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
             let line = good.iter().filter(|&&b| b == b'\n').count() + 1;

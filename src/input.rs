@@ -1,0 +1,137 @@
+//! Opening user input. Every file a user names (a scene, an OBJ or MTL, a surface map, an image
+//! to compare, a sweep's CSV or point PNG) is opened here, after two checks made before it is
+//! opened: it is a regular file (a FIFO would block the open, a device such as `/dev/zero`
+//! never end, a folder is no file), and it is no larger than a stated bound. The read itself
+//! stops at the bound too, so a file that grows meanwhile cannot make it spend more.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// The largest image [`read_image`] decodes, bytes of file: 1 GiB.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
+
+/// The largest text table (a sweep's `results.csv`) read, bytes: 64 MiB.
+pub const MAX_TABLE_BYTES: u64 = 64 << 20;
+
+/// An input that cannot be used, naming the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct InputError {
+    /// The file named by the user.
+    pub path: PathBuf,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+fn error(path: &Path, message: impl std::fmt::Display) -> InputError {
+    InputError {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    }
+}
+
+/// Checks that `path` is a regular file of at most `max_bytes` (`what` names it in the
+/// message, e.g. "scene"), and returns its size. Nothing is opened.
+pub fn check_regular_file(path: &Path, max_bytes: u64, what: &str) -> Result<u64, InputError> {
+    let meta =
+        std::fs::metadata(path).map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    if meta.is_dir() {
+        return Err(error(
+            path,
+            format!("is a folder: not a regular file, so not a {what}"),
+        ));
+    }
+    if !meta.is_file() {
+        return Err(error(
+            path,
+            format!("is not a regular file (a pipe or a device), so it cannot be read as a {what}"),
+        ));
+    }
+    if meta.len() > max_bytes {
+        return Err(error(
+            path,
+            format!(
+                "the {what} is {} bytes, more than the limit of {max_bytes}",
+                meta.len()
+            ),
+        ));
+    }
+    Ok(meta.len())
+}
+
+/// Opens `path` for reading after [`check_regular_file`].
+pub fn open(path: &Path, max_bytes: u64, what: &str) -> Result<File, InputError> {
+    check_regular_file(path, max_bytes, what)?;
+    File::open(path).map_err(|e| error(path, format!("cannot read the {what}: {e}")))
+}
+
+/// Reads all of `path` after [`check_regular_file`], at most `max_bytes` of it.
+pub fn read(path: &Path, max_bytes: u64, what: &str) -> Result<Vec<u8>, InputError> {
+    let file = open(path, max_bytes, what)?;
+    let mut bytes = Vec::new();
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(error(
+            path,
+            format!("the {what} grew past the limit of {max_bytes} bytes while it was read"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// Reads `path` as UTF-8 text, as [`read`] does.
+pub fn read_text(path: &Path, max_bytes: u64, what: &str) -> Result<String, InputError> {
+    String::from_utf8(read(path, max_bytes, what)?)
+        .map_err(|_| error(path, format!("the {what} is not UTF-8 text")))
+}
+
+/// Reads an image file (any format the `image` crate reads here) as RGBA8, refusing it from
+/// its header, before it is decoded, when a side is 0 or the image is larger than the renderer
+/// itself may draw ([`crate::raster::framebuffer::check_size`]).
+pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputError> {
+    let bytes = read(path, MAX_IMAGE_FILE_BYTES, what)?;
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .map_err(|e| error(path, format!("cannot read the {what}: {e}")))
+    };
+    let (width, height) = reader()?
+        .into_dimensions()
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    crate::raster::framebuffer::check_size(width, height)
+        .map_err(|e| error(path, format!("the {what} is {width}×{height}: {e}")))?;
+    Ok(reader()?
+        .decode()
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?
+        .into_rgba8())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folders_devices_and_oversized_files_are_refused_before_reading() {
+        let dir = std::env::temp_dir().join(format!("pelage-input-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let folder = read(&dir, 10, "scene").unwrap_err();
+        assert!(
+            folder.message.contains("is a folder: not a regular file"),
+            "{folder}"
+        );
+        let device = read(Path::new("/dev/zero"), 10, "scene").unwrap_err();
+        assert!(device.message.contains("not a regular file"), "{device}");
+        let file = dir.join("big.txt");
+        std::fs::write(&file, "0123456789abc").expect("write");
+        let big = read(&file, 10, "table").unwrap_err();
+        assert!(big.message.contains("13 bytes"), "{big}");
+        assert_eq!(read(&file, 13, "table").expect("fits"), b"0123456789abc");
+        assert!(read_text(&file, 13, "table").is_ok());
+        let missing = read(&dir.join("none"), 10, "map").unwrap_err();
+        assert!(missing.to_string().contains("none"), "{missing}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
