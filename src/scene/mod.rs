@@ -836,6 +836,41 @@ impl Default for MotionSettings {
     }
 }
 
+/// The first array in the scene text longer than the value it was read into (the key, the
+/// number of values given and taken), found by comparing the text's arrays with the parsed
+/// scene written back: a fixed-size value (a vector, a colour, a pair) takes exactly its size.
+fn longer_arrays(text: &str, scene: &Scene) -> Option<(String, usize, usize)> {
+    let source: toml::Table = text.parse().ok()?;
+    let typed = toml::Value::try_from(scene).ok()?;
+    fn walk(
+        source: &toml::Value,
+        typed: &toml::Value,
+        key: &str,
+    ) -> Option<(String, usize, usize)> {
+        match (source, typed) {
+            (toml::Value::Table(s), toml::Value::Table(t)) => s.iter().find_map(|(name, value)| {
+                let key = if key.is_empty() {
+                    name.clone()
+                } else {
+                    format!("{key}.{name}")
+                };
+                t.get(name).and_then(|typed| walk(value, typed, &key))
+            }),
+            (toml::Value::Array(s), toml::Value::Array(t)) => {
+                if s.len() > t.len() {
+                    return Some((key.to_string(), s.len(), t.len()));
+                }
+                s.iter()
+                    .zip(t)
+                    .enumerate()
+                    .find_map(|(k, (s, t))| walk(s, t, &format!("{key}[{k}]")))
+            }
+            _ => None,
+        }
+    }
+    walk(&toml::Value::Table(source), &typed, "")
+}
+
 impl Scene {
     /// Whether something beyond the wind bends the fur (gravity, motion or a direction map):
     /// layers then move by the combined lean ([`crate::shading::motion`]).
@@ -860,6 +895,15 @@ impl Scene {
             }
         })?;
         scene.base_dir = base_dir.to_path_buf();
+        // Fixed-size values take exactly their size: `direction = [1, 0, 0, 9]` would otherwise
+        // be read as its first three numbers (serde stops reading), the rest silently dropped.
+        if let Some((key, given, taken)) = longer_arrays(text, &scene) {
+            return Err(SceneError {
+                file: file.to_string(),
+                line: validate::line_of_key(text, &key),
+                message: format!("{key} takes exactly {taken} values, {given} are given"),
+            });
+        }
         validate::validate(&scene, &Limits::default()).map_err(|(key, message)| SceneError {
             file: file.to_string(),
             line: validate::line_of_key(text, &key),

@@ -87,10 +87,18 @@ fn colour(key: &str, v: Vec3) -> Result<(), Failure> {
     Ok(())
 }
 
+/// A direction: finite, and normalisable in f32 (its squared length neither overflows nor
+/// underflows to 0), since every user of it normalises it first and would silently get zero.
 fn nonzero(key: &str, v: Vec3) -> Result<(), Failure> {
     finite_vec(key, v)?;
     if v.length_squared() == 0.0 {
         return Err((key.into(), format!("{key} must not be the zero vector")));
+    }
+    if v.try_normalize().is_none() {
+        return Err((
+            key.into(),
+            format!("{key} = {v} cannot be normalised in f32 (its length overflows or vanishes)"),
+        ));
     }
     Ok(())
 }
@@ -122,7 +130,18 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
             "camera.target must differ from camera.eye".into(),
         ));
     }
-    if (c.target - c.eye).cross(c.up).length_squared() == 0.0 {
+    if (c.target - c.eye).try_normalize().is_none() {
+        return Err((
+            "camera.eye".into(),
+            "camera.eye is so far from camera.target that the view direction overflows f32".into(),
+        ));
+    }
+    let view = (c.target - c.eye).normalize_or_zero();
+    if view
+        .cross(c.up.normalize_or_zero())
+        .try_normalize()
+        .is_none()
+    {
         return Err((
             "camera.up".into(),
             "camera.up must not be parallel to the view direction".into(),
@@ -447,6 +466,7 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     }
 
     nonzero("light.direction", scene.light.direction)?;
+    finite_vec("light.colour", scene.light.colour)?;
     range_f32("light.colour", scene.light.colour.max_element(), 0.0, 100.0)?;
     if scene.light.colour.min_element() < 0.0 {
         return Err((
@@ -701,5 +721,55 @@ mod tests {
                 "{err}"
             );
         }
+    }
+
+    #[test]
+    fn vectors_that_vanish_or_overflow_when_normalised_are_refused() {
+        for (text, key) in [
+            (
+                "[light]\ndirection = [1e30, 1e30, 1e30]\n",
+                "light.direction",
+            ),
+            (
+                "[light]\ndirection = [1e-30, 0.0, 0.0]\n",
+                "light.direction",
+            ),
+            ("[wind]\ndirection = [3e38, 3e38, 0.0]\n", "wind.direction"),
+            (
+                "[gravity]\ndirection = [0.0, -1e-25, 0.0]\n",
+                "gravity.direction",
+            ),
+            ("[light]\ncolour = [nan, 1.0, 1.0]\n", "light.colour"),
+            (
+                "[camera]\neye = [3e38, 0.0, 0.0]\ntarget = [-3e38, 0.0, 0.0]\n",
+                "camera.eye",
+            ),
+        ] {
+            let err = parse(text).unwrap_err();
+            assert!(err.to_string().contains(key), "{text}: {err}");
+        }
+    }
+
+    #[test]
+    fn arrays_longer_than_their_value_are_refused() {
+        for (text, key) in [
+            (
+                "[light]\ndirection = [1.0, 0.0, 0.0, 9.0]\n",
+                "light.direction",
+            ),
+            (
+                "[fur]\ntexture_repeat = [8.0, 4.0, 2.0]\n",
+                "fur.texture_repeat",
+            ),
+            (
+                "[image]\nbackground = [0.1, 0.2, 0.3, \"x\"]\n",
+                "image.background",
+            ),
+        ] {
+            let err = parse(text).unwrap_err();
+            assert!(err.to_string().contains(key), "{text}: {err}");
+            assert!(err.to_string().contains("takes exactly"), "{text}: {err}");
+        }
+        assert!(parse("[light]\ndirection = [1.0, 0.0, 0.0]\n").is_ok());
     }
 }
