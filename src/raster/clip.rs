@@ -93,6 +93,12 @@ pub fn clip_triangle<V: Varyings>(
             let db = plane_distance(b.position, plane);
             let a_inside = da >= 0.0;
             let b_inside = db >= 0.0;
+            // A convex polygon gains at most one vertex per plane, but coordinates near f32's
+            // limits round cut points off their plane and can make it non-convex: a polygon
+            // that would outgrow its room is such a one, and is dropped (as below).
+            if out + 2 > MAX_POLYGON {
+                return;
+            }
             if a_inside {
                 scratch[out] = a;
                 out += 1;
@@ -240,5 +246,47 @@ mod tests {
         };
         let (l, r) = (cut(&left), cut(&right));
         assert!(l.iter().any(|p| r.contains(p)), "{l:?} vs {r:?}");
+    }
+
+    #[test]
+    fn extreme_coordinates_never_index_past_the_polygon() {
+        // Regression for the `triangle` fuzz target's index-out-of-bounds: random triangles
+        // whose coordinates mix f32's extremes, tiny values, zeros and ordinary numbers.
+        const VALUES: [f32; 12] = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            1e-30,
+            -1e-30,
+            3.0e38,
+            -3.0e38,
+            f32::MAX,
+            -f32::MAX,
+            64.0,
+            0.5,
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..200_000 {
+            let mut pick = || {
+                let r = next();
+                if r % 3 == 0 {
+                    f32::from_bits((r >> 8) as u32)
+                } else {
+                    VALUES[(r >> 8) as usize % VALUES.len()]
+                }
+            };
+            let mut vertex = || v(pick(), pick(), pick(), pick());
+            let triangle = [vertex(), vertex(), vertex()];
+            clip_triangle(triangle, |out| {
+                assert!(out.iter().all(|c| c.position.is_finite()));
+            });
+        }
     }
 }
