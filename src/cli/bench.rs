@@ -54,12 +54,12 @@ pub fn run(args: BenchArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
     let name = scene_name(&args.common);
     let pool = thread_pool(args.common.threads)?;
-    let start = Instant::now();
-    let prepared = pool.install(|| -> Result<PreparedScene, Failure> {
+    let (prepared, bake_ms) = pool.install(|| -> Result<(PreparedScene, f64), Failure> {
         check_limits(&scene, &args.common, 1, false)?;
-        PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))
+        let start = Instant::now();
+        let prepared = PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))?;
+        Ok((prepared, start.elapsed().as_secs_f64() * 1e3))
     })?;
-    let bake_ms = start.elapsed().as_secs_f64() * 1e3;
     let bench = Bench {
         args: &args,
         scene: &scene,
