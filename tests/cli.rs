@@ -166,18 +166,130 @@ fn an_obj_without_uvs_renders_with_a_warning() {
 
 #[test]
 fn bench_reports_json() {
-    let o = pelage(&[
-        "bench", "--width", "64", "--height", "48", "--frames", "2", "--json",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = String::from_utf8_lossy(&o.stdout);
+    let report = bench_json(&["--frames", "2"]).expect("the oracle needs no adapter");
+    let keys = json_keys(&report);
     for key in [
-        "\"bake_ms\"",
-        "\"median_frame_ms\"",
-        "\"fps\"",
-        "\"fragments_per_s\"",
+        "bake_ms",
+        "median_frame_ms",
+        "fps",
+        "fragments_per_s",
+        "backend",
+        "adapter",
+        "median_cpu_ms",
     ] {
-        assert!(text.contains(key), "{key} missing from {text}");
+        assert!(keys.contains(key), "{key} missing from {report}");
+    }
+    assert_eq!(report["frames"], 2);
+}
+
+/// The keys of a JSON object printed by `pelage bench`.
+fn json_keys(value: &serde_json::Value) -> std::collections::BTreeSet<String> {
+    value
+        .as_object()
+        .unwrap_or_else(|| panic!("a JSON object: {value}"))
+        .keys()
+        .cloned()
+        .collect()
+}
+
+/// `pelage bench ARGS --json`, parsed; `None` (with a note) where there is no Vulkan adapter.
+fn bench_json(args: &[&str]) -> Option<serde_json::Value> {
+    let mut all = vec!["bench", "--width", "64", "--height", "48"];
+    if !args.contains(&"--frames") {
+        all.extend(["--frames", "1"]);
+    }
+    all.extend(args);
+    all.push("--json");
+    let o = pelage(&all);
+    let err = stderr(&o);
+    if err.contains("no Vulkan adapter") {
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        eprintln!("skipped: no Vulkan adapter on this machine (install mesa-vulkan-drivers)");
+        return None;
+    }
+    assert!(o.status.success(), "{all:?}: {err}");
+    let text = String::from_utf8_lossy(&o.stdout);
+    Some(serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}")))
+}
+
+#[cfg(feature = "gpu")]
+#[test]
+fn bench_on_the_gpu_reports_every_field_of_the_oracles() {
+    let oracle = bench_json(&[]).expect("the oracle needs no adapter");
+    let Some(gpu) = bench_json(&["--backend", "gpu", "--threads", "2"]) else {
+        return;
+    };
+    let (oracle_keys, gpu_keys) = (json_keys(&oracle), json_keys(&gpu));
+    let missing: Vec<&String> = oracle_keys.difference(&gpu_keys).collect();
+    assert!(
+        missing.is_empty(),
+        "missing from the GPU's JSON: {missing:?}"
+    );
+    assert_eq!(gpu["backend"], "gpu");
+    assert!(gpu["adapter"].is_string(), "{gpu}");
+    assert_eq!(
+        gpu["threads"], 2,
+        "--threads sets lavapipe's threads: {gpu}"
+    );
+    assert!(gpu["median_frame_ms"].as_f64().is_some_and(|t| t > 0.0));
+    assert!(gpu["readback_ms"].as_f64().is_some(), "{gpu}");
+    assert_eq!(oracle["backend"], "cpu");
+}
+
+#[cfg(feature = "gpu")]
+#[test]
+fn bench_race_prints_both_backends_and_their_ratio() {
+    let args = [
+        "bench",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--frames",
+        "2",
+        "--threads",
+        "2",
+        "--race",
+    ];
+    let o = pelage(&args);
+    let err = stderr(&o);
+    if err.contains("no Vulkan adapter") {
+        eprintln!("skipped: no Vulkan adapter on this machine (install mesa-vulkan-drivers)");
+        return;
+    }
+    assert!(o.status.success(), "{err}");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("\noracle "), "{text}");
+    assert!(text.contains("frame time: oracle is "), "{text}");
+    assert!(
+        text.contains("× faster than") || text.contains("× slower than"),
+        "{text}"
+    );
+    let Some(race) = bench_json(&["--threads", "2", "--race"]) else {
+        return;
+    };
+    assert_eq!(race["oracle"]["backend"], "cpu");
+    assert_eq!(race["gpu"]["backend"], "gpu");
+    assert_eq!(json_keys(&race["oracle"]), json_keys(&race["gpu"]));
+    assert!(
+        race["wall_ratio"].as_f64().is_some_and(|r| r > 0.0),
+        "{race}"
+    );
+    assert!(
+        race["summary"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("oracle is ")),
+        "{race}"
+    );
+}
+
+#[test]
+fn bench_refuses_an_unknown_backend_and_a_gpu_it_lacks() {
+    refused(&["bench", "--backend", "vulkan"], "--backend");
+    refused(&["bench", "--backend", "gpu", "--race"], "--race");
+    if !cfg!(feature = "gpu") {
+        refused(&["bench", "--backend", "gpu"], "`gpu` feature");
+        refused(&["bench", "--race"], "`gpu` feature");
     }
 }
 

@@ -315,6 +315,32 @@ fn a_tangent_not_bent_by_the_lean_is_caught() {
     );
 }
 
+/// `pelage bench --backend gpu` draws one frame set up once again and again: every draw gives
+/// the image of a fresh `render`, fins included.
+#[test]
+fn a_frame_set_up_once_draws_the_same_image_every_time() {
+    let context = context();
+    let (scene, _) = load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/thesis-4-2.toml"
+    )));
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    assert!(prepared.fin_textures().is_some(), "the scene has fins");
+    let options = GpuOptions::default();
+    let fresh = context
+        .render(&prepared, scene.time, &options)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let frame = context
+        .prepare_frame(&prepared, scene.time, &options)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(frame.size(), (scene.image.width, scene.image.height));
+    for draw in 0..3 {
+        frame.draw().unwrap_or_else(|e| panic!("{e}"));
+        let image = frame.read_back().unwrap_or_else(|e| panic!("{e}"));
+        assert!(image == fresh, "draw {draw} differs from a fresh render");
+    }
+}
+
 #[test]
 fn a_gpu_sweep_against_the_oracle_adds_the_metrics() {
     let dir = out_dir().join("sweep");

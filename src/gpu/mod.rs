@@ -139,14 +139,31 @@ impl GpuContext {
     }
 
     /// Draws `prepared` at `time` (seconds): the skin, the shells root to tip, the fins.
+    /// One call sets the frame up ([`GpuContext::prepare_frame`]), draws it once and reads it
+    /// back; to draw the same frame many times, prepare it once.
     pub fn render(
         &self,
         prepared: &PreparedScene,
         time: f32,
         options: &GpuOptions,
     ) -> Result<RgbaImage, GpuError> {
+        let frame = self.prepare_frame(prepared, time, options)?;
+        frame.draw()?;
+        frame.read_back()
+    }
+
+    /// Sets up the frame of `prepared` at `time` on the device: the textures, the mesh and the
+    /// fin quads of that instant uploaded, the pipelines built, the render pass ready to be
+    /// submitted by [`GpuFrame::draw`] as often as wanted (the same view each time: the fins
+    /// are view dependent, so a frame at another instant or camera needs a new set-up).
+    pub fn prepare_frame(
+        &self,
+        prepared: &PreparedScene,
+        time: f32,
+        options: &GpuOptions,
+    ) -> Result<GpuFrame<'_>, GpuError> {
         let guard = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let result = self.render_inner(prepared, time, options);
+        let result = self.prepare_inner(prepared, time, options);
         let scope = pollster::block_on(guard.pop());
         if let Some(e) = scope {
             return Err(GpuError::Validation(e.to_string()));
@@ -154,12 +171,12 @@ impl GpuContext {
         result
     }
 
-    fn render_inner(
+    fn prepare_inner(
         &self,
         prepared: &PreparedScene,
         time: f32,
         options: &GpuOptions,
-    ) -> Result<RgbaImage, GpuError> {
+    ) -> Result<GpuFrame<'_>, GpuError> {
         let device = &self.device;
         let s = prepared.scene();
         let (width, height) = (s.image.width, s.image.height);
@@ -562,125 +579,30 @@ impl GpuContext {
         let target_view = target.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
         let bg = s.image.background;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("fur"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: f64::from(bg.x),
-                            g: f64::from(bg.y),
-                            b: f64::from(bg.z),
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &frame_group, &[]);
-            pass.set_vertex_buffer(0, mesh_buffer.slice(..));
-            pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            // The skin: opaque, writes depth.
-            pass.set_pipeline(&skin_pipeline);
-            pass.set_bind_group(1, &skin_group, &[]);
-            pass.draw_indexed(0..mesh_index_count, 0, 0..1);
-            // Fins at the silhouette, before the shells (as the oracle draws them).
-            if let Some((vertices, indices, count, group)) = &fin {
-                pass.set_pipeline(&fin_pipeline);
-                pass.set_bind_group(1, group, &[]);
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..*count, 0, 0..1);
-                pass.set_vertex_buffer(0, mesh_buffer.slice(..));
-                pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            }
-            // Shells, root to tip (thesis 3.1.4).
-            pass.set_pipeline(&shell_pipeline);
-            for group in &shell_groups {
-                pass.set_bind_group(1, group, &[]);
-                pass.draw_indexed(0..mesh_index_count, 0, 0..1);
-            }
-        }
-        let texel_bytes = if self.target_format == wgpu::TextureFormat::Rgba32Float {
-            16
-        } else {
-            8
-        };
-        let row = (width * texel_bytes).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: u64::from(row) * u64::from(height),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &target,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
+        Ok(GpuFrame {
+            context: self,
+            width,
+            height,
+            background: wgpu::Color {
+                r: f64::from(bg.x),
+                g: f64::from(bg.y),
+                b: f64::from(bg.z),
+                a: 1.0,
             },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(height),
-                },
-            },
-            size,
-        );
-        self.queue.submit([encoder.finish()]);
-        let slice = readback.slice(..);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = sender.send(r);
-        });
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        receiver
-            .recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mut rgba = Vec::with_capacity(width as usize * height as usize * 4);
-        for y in 0..height as usize {
-            let line = &data[y * row as usize..][..(width * texel_bytes) as usize];
-            if texel_bytes == 16 {
-                for c in line.chunks_exact(4) {
-                    rgba.push(to_unorm8(f32::from_le_bytes([c[0], c[1], c[2], c[3]])));
-                }
-            } else {
-                for c in line.chunks_exact(2) {
-                    rgba.push(to_unorm8(half_to_f32(u16::from_le_bytes([c[0], c[1]]))));
-                }
-            }
-        }
-        drop(data);
-        readback.unmap();
-        RgbaImage::from_raw(width, height, rgba)
-            .ok_or_else(|| GpuError::Readback("short image".into()))
+            target,
+            target_view,
+            depth_view,
+            frame_group,
+            mesh_buffer,
+            index_buffer,
+            mesh_index_count,
+            skin_pipeline,
+            skin_group,
+            fin_pipeline,
+            fin,
+            shell_pipeline,
+            shell_groups,
+        })
     }
 
     fn storage(&self, floats: &[f32], label: &str) -> wgpu::Buffer {
@@ -765,6 +687,196 @@ impl GpuContext {
             );
         }
         gpu.create_view(&Default::default())
+    }
+}
+
+/// A fin pass of a frame: vertices, indices, index count, layer bind group.
+type FinDraw = (wgpu::Buffer, wgpu::Buffer, u32, wgpu::BindGroup);
+
+/// One frame set up on the device by [`GpuContext::prepare_frame`]: everything uploaded once,
+/// the render pass submitted again by each [`GpuFrame::draw`]. Its targets are cleared at the
+/// start of every pass, so every draw gives the same image.
+pub struct GpuFrame<'a> {
+    context: &'a GpuContext,
+    width: u32,
+    height: u32,
+    background: wgpu::Color,
+    target: wgpu::Texture,
+    target_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    frame_group: wgpu::BindGroup,
+    mesh_buffer: wgpu::Buffer,
+    index_buffer: wgpu::Buffer,
+    mesh_index_count: u32,
+    skin_pipeline: wgpu::RenderPipeline,
+    skin_group: wgpu::BindGroup,
+    fin_pipeline: wgpu::RenderPipeline,
+    fin: Option<FinDraw>,
+    shell_pipeline: wgpu::RenderPipeline,
+    shell_groups: Vec<wgpu::BindGroup>,
+}
+
+impl GpuFrame<'_> {
+    /// The frame's size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Submits the frame's render pass (the skin, the fins, the shells root to tip) and waits
+    /// until the device has finished it. Nothing is uploaded or read back: this is the frame
+    /// time of a renderer whose data already lives on the device.
+    pub fn draw(&self) -> Result<(), GpuError> {
+        let device = &self.context.device;
+        let guard = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.encode_pass(&mut encoder);
+        let index = self.context.queue.submit([encoder.finish()]);
+        let waited = device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Readback(e.to_string()));
+        if let Some(e) = pollster::block_on(guard.pop()) {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        waited.map(|_| ())
+    }
+
+    /// Copies the last drawn frame to the CPU and rounds it to 8 bits with the oracle's rule.
+    pub fn read_back(&self) -> Result<RgbaImage, GpuError> {
+        let device = &self.context.device;
+        let guard = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = self.read_back_inner();
+        if let Some(e) = pollster::block_on(guard.pop()) {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        result
+    }
+
+    fn encode_pass(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("fur"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.target_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(self.background),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        // The skin: opaque, writes depth.
+        pass.set_pipeline(&self.skin_pipeline);
+        pass.set_bind_group(1, &self.skin_group, &[]);
+        pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
+        // Fins at the silhouette, before the shells (as the oracle draws them).
+        if let Some((vertices, indices, count, group)) = &self.fin {
+            pass.set_pipeline(&self.fin_pipeline);
+            pass.set_bind_group(1, group, &[]);
+            pass.set_vertex_buffer(0, vertices.slice(..));
+            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..*count, 0, 0..1);
+            pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
+            pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        }
+        // Shells, root to tip (thesis 3.1.4).
+        pass.set_pipeline(&self.shell_pipeline);
+        for group in &self.shell_groups {
+            pass.set_bind_group(1, group, &[]);
+            pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
+        }
+    }
+
+    fn read_back_inner(&self) -> Result<RgbaImage, GpuError> {
+        let device = &self.context.device;
+        let (width, height) = (self.width, self.height);
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let texel_bytes = if self.context.target_format == wgpu::TextureFormat::Rgba32Float {
+            16
+        } else {
+            8
+        };
+        let row = (width * texel_bytes).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(row) * u64::from(height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.target,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(height),
+                },
+            },
+            size,
+        );
+        self.context.queue.submit([encoder.finish()]);
+        let slice = readback.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        receiver
+            .recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut rgba = Vec::with_capacity(width as usize * height as usize * 4);
+        for y in 0..height as usize {
+            let line = &data[y * row as usize..][..(width * texel_bytes) as usize];
+            if texel_bytes == 16 {
+                for c in line.chunks_exact(4) {
+                    rgba.push(to_unorm8(f32::from_le_bytes([c[0], c[1], c[2], c[3]])));
+                }
+            } else {
+                for c in line.chunks_exact(2) {
+                    rgba.push(to_unorm8(half_to_f32(u16::from_le_bytes([c[0], c[1]]))));
+                }
+            }
+        }
+        drop(data);
+        readback.unmap();
+        RgbaImage::from_raw(width, height, rgba)
+            .ok_or_else(|| GpuError::Readback("short image".into()))
     }
 }
 
