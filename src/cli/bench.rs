@@ -77,7 +77,7 @@ pub fn run(args: BenchArgs) -> Result<(), Failure> {
     } else {
         bench.oracle()?.text(args.json)?
     };
-    println!("{text}");
+    super::say(text)?;
     Ok(())
 }
 
