@@ -62,6 +62,13 @@ pub const THESIS_NAMES: &[(&str, &str)] = &[
 ///   (level of detail against every shell, at each distance).
 pub const SPECIAL_NAMES: &[&str] = &["camera_distance", "number_of_spots", "lod"];
 
+/// The deepest dotted scene key a parameter may name (the scene's deepest key is
+/// `shading.weights.diffuse`-like, three levels; spots and paths add an index).
+pub const MAX_KEY_DEPTH: usize = 8;
+
+/// The most arrays or inline tables a parameter's values may open, all together.
+pub const MAX_VALUE_NESTING: usize = 64;
+
 impl SweepParameter {
     /// Parses `NAME=V1,V2,...`. Commas inside brackets belong to array values.
     pub fn parse(arg: &str) -> Result<Self, SweepError> {
@@ -72,6 +79,23 @@ impl SweepParameter {
         let name = name.trim();
         if name.is_empty() {
             return Err(bad("the parameter name is empty"));
+        }
+        // One line: a value with a line break would be a second TOML line, another key.
+        if arg.contains(['\n', '\r']) {
+            return Err(bad("a line break in a parameter is not allowed"));
+        }
+        // Scene keys are at most a few tables deep; a long dotted name is a mistake, and a
+        // 20,000-level one would exhaust the stack of the TOML reader.
+        let depth = name.split('.').count();
+        if depth > MAX_KEY_DEPTH {
+            return Err(bad(&format!(
+                "the name is {depth} keys deep; scene keys are at most {MAX_KEY_DEPTH}"
+            )));
+        }
+        if list.chars().filter(|&c| c == '[' || c == '{').count() > MAX_VALUE_NESTING {
+            return Err(bad(&format!(
+                "the value nests more than {MAX_VALUE_NESTING} arrays or tables"
+            )));
         }
         let mut values = Vec::new();
         let (mut depth, mut start) = (0i32, 0usize);
@@ -388,5 +412,22 @@ mod tests {
                 "{arg}: {err}"
             );
         }
+    }
+
+    #[test]
+    fn line_breaks_and_deep_names_are_refused_before_any_toml_is_read() {
+        for (arg, needle) in [
+            ("number_of_shells=10\n[fur]", "line break"),
+            ("fur.colour=[1,0,0]\r", "line break"),
+        ] {
+            let err = SweepParameter::parse(arg).unwrap_err();
+            assert!(err.0.contains(needle), "{arg:?}: {err}");
+        }
+        let deep = format!("{}=1", vec!["a"; 20_000].join("."));
+        let err = SweepParameter::parse(&deep).unwrap_err();
+        assert!(err.0.contains("keys deep"), "{err}");
+        let nested = format!("fur.colour={}1{}", "[".repeat(20_000), "]".repeat(20_000));
+        let err = SweepParameter::parse(&nested).unwrap_err();
+        assert!(err.0.contains("nests"), "{err}");
     }
 }
