@@ -534,7 +534,13 @@ pub fn scan_obj_reader(
         }
         return Ok(s);
     };
+    // Each library once, however often it is named (a file repeating `mtllib` thousands of
+    // times rescanned it each time).
+    let mut seen = std::collections::BTreeSet::new();
     for (line, name) in libraries {
+        if !seen.insert(name.clone()) {
+            continue;
+        }
         let mtl = dir.join(&name);
         if !mtl.exists() {
             s.warnings.push(format!(
@@ -752,6 +758,15 @@ f 5/5 6/6 7/7
         let loaded = load_obj(&path).unwrap();
         assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
         assert!(loaded.warnings[0].contains("materials"));
+    }
+
+    #[test]
+    fn a_library_named_many_times_is_looked_up_once() {
+        let mut text = "mtllib nowhere.mtl\n".repeat(5000);
+        text.push_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+        let path = write_obj("many-mtl.obj", &text);
+        let loaded = load_obj(&path).unwrap();
+        assert_eq!(loaded.warnings.len(), 1, "{:?}", &loaded.warnings[..2]);
     }
 
     #[test]
