@@ -77,7 +77,15 @@ fn zero_area_faces_and_repeated_vertices() {
 fn huge_coordinates() {
     // A whole tetrahedron at 1e30, seen from far away, and one vertex at 1e30 among small ones.
     let far = "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
-    render_obj("huge", far, [3e30, 2e30, 4e30], "");
+    render_obj("huge", far, [6e18, 4e18, 8e18], "");
+    // Farther, the view vector's length overflows f32: refused, never a background-only image.
+    let text = scene(
+        &format!("kind = \"obj\"\npath = \"huge.obj\""),
+        [3e30, 2e30, 4e30],
+        "",
+    );
+    let err = Scene::parse(&text, "too-far", &dir()).unwrap_err();
+    assert!(err.to_string().contains("camera.eye"), "{err}");
     let spike = format!("{QUAD}v 0 1e30 0\nvt 0.5 0.5\nf 1/1 2/2 5/5\nf 2/2 3/3 5/5\n");
     render_obj("spike", &spike, EYE, "[wind]\nstrength = 0.8\n");
     let tiny = "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nf 1 2 3\n";

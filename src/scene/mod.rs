@@ -836,6 +836,60 @@ impl Default for MotionSettings {
     }
 }
 
+/// The keys of `[mesh]` that shape a mesh of `kind` (besides `kind` itself).
+fn mesh_keys(kind: MeshKind) -> &'static [&'static str] {
+    match kind {
+        MeshKind::Torus => &["major_radius", "minor_radius", "model_resolution"],
+        MeshKind::Sphere => &["radius", "model_resolution"],
+        MeshKind::Cylinder => &["radius", "height", "model_resolution"],
+        MeshKind::Leg => &["model_resolution", "scale"],
+        MeshKind::Obj => &["path", "scale"],
+    }
+}
+
+fn debug_kind(kind: MeshKind) -> &'static str {
+    match kind {
+        MeshKind::Torus => "torus",
+        MeshKind::Sphere => "sphere",
+        MeshKind::Cylinder => "cylinder",
+        MeshKind::Leg => "leg",
+        MeshKind::Obj => "obj",
+    }
+}
+
+/// A `[mesh]` key the text sets that has no effect under the mesh's kind (a `path` on a torus,
+/// a `radius` on an OBJ), as `mesh.KEY`. A value equal to the default is let through: a scene
+/// written back by pelage (`to_toml`, the viewer's screenshots) lists every key.
+fn unused_mesh_key(text: &str, mesh: &MeshSettings) -> Option<String> {
+    let source: toml::Table = text.parse().ok()?;
+    let given = source.get("mesh")?.as_table()?;
+    let defaults = toml::Value::try_from(MeshSettings::default()).ok()?;
+    let used = mesh_keys(mesh.kind);
+    given
+        .iter()
+        .filter(|(name, _)| name.as_str() != "kind" && !used.contains(&name.as_str()))
+        .find(|(name, value)| {
+            !defaults
+                .get(name.as_str())
+                .is_some_and(|d| same_as_f32(d, value))
+        })
+        .map(|(name, _)| format!("mesh.{name}"))
+}
+
+/// Whether two TOML values are equal as the scene reads them: numbers as f32 (the text's `2.4`
+/// and the default `2.4f32` written back differ as f64).
+fn same_as_f32(a: &toml::Value, b: &toml::Value) -> bool {
+    let number = |v: &toml::Value| match v {
+        toml::Value::Float(f) => Some(*f as f32),
+        toml::Value::Integer(i) => Some(*i as f32),
+        _ => None,
+    };
+    match (number(a), number(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
 /// The first array in the scene text longer than the value it was read into (the key, the
 /// number of values given and taken), found by comparing the text's arrays with the parsed
 /// scene written back: a fixed-size value (a vector, a colour, a pair) takes exactly its size.
@@ -902,6 +956,16 @@ impl Scene {
                 file: file.to_string(),
                 line: validate::line_of_key(text, &key),
                 message: format!("{key} takes exactly {taken} values, {given} are given"),
+            });
+        }
+        if let Some(key) = unused_mesh_key(text, &scene.mesh) {
+            return Err(SceneError {
+                file: file.to_string(),
+                line: validate::line_of_key(text, &key),
+                message: format!(
+                    "{key} has no effect on a mesh of kind \"{}\"; remove it",
+                    debug_kind(scene.mesh.kind)
+                ),
             });
         }
         validate::validate(&scene, &Limits::default()).map_err(|(key, message)| SceneError {

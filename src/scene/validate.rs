@@ -772,4 +772,25 @@ mod tests {
         }
         assert!(parse("[light]\ndirection = [1.0, 0.0, 0.0]\n").is_ok());
     }
+
+    #[test]
+    fn mesh_keys_without_effect_are_refused() {
+        for (text, key) in [
+            (
+                "[mesh]\nkind = \"torus\"\npath = \"bunny.obj\"\n",
+                "mesh.path",
+            ),
+            (
+                "[mesh]\nkind = \"sphere\"\nmajor_radius = 3.0\n",
+                "mesh.major_radius",
+            ),
+            ("[mesh]\nkind = \"leg\"\nradius = 5.0\n", "mesh.radius"),
+        ] {
+            let err = parse(text).unwrap_err();
+            assert!(err.to_string().contains(key), "{text}: {err}");
+            assert!(err.to_string().contains("no effect"), "{text}: {err}");
+        }
+        // The defaults a written-back scene lists are let through.
+        assert!(parse("[mesh]\nkind = \"sphere\"\nmajor_radius = 6.0\nradius = 3.0\n").is_ok());
+    }
 }
