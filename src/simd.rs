@@ -3,10 +3,14 @@
 //! The release build targets plain x86-64 (SSE2), so every 4-lane operation of the rasterizer
 //! and the fragment stage is an SSE2 instruction. A [`Kernel`] — the rasterizer's replay of one
 //! draw's triangles over one tile, with the quad traversal and the fragment stage it calls, all
-//! inlined — is compiled once more per wider level, with `#[target_feature]`, and
-//! [`dispatch`] runs the copy of the [`SimdLevel`] asked for, once per tile and draw, never per
-//! fragment. The body stays ordinary Rust; only the instruction selection differs (VEX
-//! encoding, three-operand forms, `roundss`, `blendv`, `vpermilps`, 32 registers on AVX-512).
+//! inlined — is compiled once more for x86-64-v3 with `#[target_feature]`, and [`dispatch`]
+//! runs the copy of the [`SimdLevel`] asked for, once per tile and draw, never per fragment.
+//! The body stays ordinary Rust; only the instruction selection differs (VEX encoding,
+//! three-operand forms, `blendv` for selects, BMI shifts).
+//!
+//! No AVX-512 copy: one was built (x86-64-v3 plus AVX-512 F, BW, DQ, VL, CD) and gave the same
+//! bytes, but took 24 % *more* CPU time than the baseline on thesis-4-2 (README, "Where the time
+//! goes"), so it was removed.
 //!
 //! Invariant: **every level gives the same bytes.** Every copy runs the same IEEE operations in
 //! the same order: Rust never contracts `a·b + c` into a fused multiply-add (LLVM fuses only on
@@ -14,10 +18,10 @@
 //! the crates below — glam, wide, libm — choose their code paths by compile-time `cfg`, which is
 //! the same baseline in every copy), never reassociates a sum, and approximate reciprocals are
 //! never used. `tests/simd_levels.rs` renders scenes at every level this machine has and compares
-//! the bytes; `.ci/run` reruns the golden tests once per level.
+//! the bytes; `.ci/run` reruns the golden tests at the baseline after the run at the best level.
 //!
 //! The level is the best the CPU has ([`SimdLevel::detected`]), capped by the environment
-//! variable `PELAGE_SIMD` (`scalar`, `sse2`, `avx2`, `avx512`; [`SimdLevel::active`]), or set
+//! variable `PELAGE_SIMD` (`scalar`, `sse2`, `avx2`; [`SimdLevel::active`]), or set
 //! per frame ([`crate::raster::Frame::set_simd_level`]). `scalar` also makes the renderer run the
 //! fur fragment stage's scalar twin (one fragment at a time) instead of the quad stage; the
 //! rasterizer's own quad traversal then runs at the baseline. A cap above what the CPU has runs
@@ -26,8 +30,8 @@
 use std::fmt;
 use std::sync::OnceLock;
 
-/// The environment variable that caps the level: `scalar`, `sse2` (alias `baseline`), `avx2`
-/// or `avx512`.
+/// The environment variable that caps the level: `scalar`, `sse2` (alias `baseline`) or
+/// `avx2`.
 pub const SIMD_ENV: &str = "PELAGE_SIMD";
 
 /// An instruction-set level of the hot path, from the narrowest. Levels are ordered: a cap
@@ -40,13 +44,11 @@ pub enum SimdLevel {
     Sse2,
     /// x86-64-v3: AVX2, FMA (never used for fragment arithmetic), BMI1/2, LZCNT, POPCNT, MOVBE.
     Avx2,
-    /// x86-64-v3 plus AVX-512 F, BW, DQ, VL and CD.
-    Avx512,
 }
 
 /// An unknown value of [`SIMD_ENV`].
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{SIMD_ENV}={value:?} is not a SIMD level: expected scalar, sse2, avx2 or avx512")]
+#[error("{SIMD_ENV}={value:?} is not a SIMD level: expected scalar, sse2 or avx2")]
 pub struct SimdLevelError {
     /// The value given.
     pub value: String,
@@ -54,12 +56,7 @@ pub struct SimdLevelError {
 
 impl SimdLevel {
     /// Every level, narrowest first.
-    pub const ALL: [SimdLevel; 4] = [
-        SimdLevel::Scalar,
-        SimdLevel::Sse2,
-        SimdLevel::Avx2,
-        SimdLevel::Avx512,
-    ];
+    pub const ALL: [SimdLevel; 3] = [SimdLevel::Scalar, SimdLevel::Sse2, SimdLevel::Avx2];
 
     /// The name [`SIMD_ENV`] takes.
     pub fn name(self) -> &'static str {
@@ -67,7 +64,6 @@ impl SimdLevel {
             SimdLevel::Scalar => "scalar",
             SimdLevel::Sse2 => "sse2",
             SimdLevel::Avx2 => "avx2",
-            SimdLevel::Avx512 => "avx512",
         }
     }
 
@@ -75,9 +71,7 @@ impl SimdLevel {
     pub fn detected() -> SimdLevel {
         static DETECTED: OnceLock<SimdLevel> = OnceLock::new();
         *DETECTED.get_or_init(|| {
-            if x86::has_avx512() {
-                SimdLevel::Avx512
-            } else if x86::has_avx2() {
+            if x86::has_avx2() {
                 SimdLevel::Avx2
             } else {
                 SimdLevel::Sse2
@@ -136,7 +130,6 @@ impl std::str::FromStr for SimdLevel {
             "scalar" => Ok(SimdLevel::Scalar),
             "sse2" | "baseline" => Ok(SimdLevel::Sse2),
             "avx2" => Ok(SimdLevel::Avx2),
-            "avx512" => Ok(SimdLevel::Avx512),
             _ => Err(SimdLevelError {
                 value: s.to_string(),
             }),
@@ -160,10 +153,6 @@ pub trait Kernel {
 pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
     {
-        if level >= SimdLevel::Avx512 && x86::has_avx512() {
-            // SAFETY: the features `x86::avx512` enables were detected on this CPU just above.
-            return unsafe { x86::avx512(kernel) };
-        }
         if level >= SimdLevel::Avx2 && x86::has_avx2() {
             // SAFETY: the features `x86::avx2` enables were detected on this CPU just above.
             return unsafe { x86::avx2(kernel) };
@@ -189,25 +178,8 @@ mod x86 {
             && is_x86_feature_detected!("movbe")
     }
 
-    /// x86-64-v3 and AVX-512 F, BW, DQ, VL, CD.
-    pub(super) fn has_avx512() -> bool {
-        has_avx2()
-            && is_x86_feature_detected!("avx512f")
-            && is_x86_feature_detected!("avx512bw")
-            && is_x86_feature_detected!("avx512dq")
-            && is_x86_feature_detected!("avx512vl")
-            && is_x86_feature_detected!("avx512cd")
-    }
-
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
     pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
-        kernel.run()
-    }
-
-    #[target_feature(
-        enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe,avx512f,avx512bw,avx512dq,avx512vl,avx512cd"
-    )]
-    pub(super) fn avx512<K: Kernel>(kernel: K) -> K::Output {
         kernel.run()
     }
 }
@@ -216,10 +188,6 @@ mod x86 {
 #[cfg(not(target_arch = "x86_64"))]
 mod x86 {
     pub(super) fn has_avx2() -> bool {
-        false
-    }
-
-    pub(super) fn has_avx512() -> bool {
         false
     }
 }
@@ -246,14 +214,14 @@ mod tests {
             assert_eq!(level.to_string().to_uppercase().parse(), Ok(level));
         }
         assert_eq!(" baseline ".parse(), Ok(SimdLevel::Sse2));
-        let e = "avx3".parse::<SimdLevel>().unwrap_err();
-        assert!(e.to_string().contains("\"avx3\""), "{e}");
+        let e = "avx512".parse::<SimdLevel>().unwrap_err();
+        assert!(e.to_string().contains("\"avx512\""), "{e}");
     }
 
     #[test]
     fn levels_are_capped_by_the_cpu() {
         let best = SimdLevel::detected();
-        assert_eq!(SimdLevel::Avx512.capped(), best);
+        assert_eq!(SimdLevel::Avx2.capped(), best);
         assert_eq!(SimdLevel::Scalar.capped(), SimdLevel::Scalar);
         assert!(SimdLevel::available().contains(&SimdLevel::Sse2));
         assert_eq!(SimdLevel::available().last(), Some(&best));
