@@ -6,8 +6,8 @@
 //! thesis's shading terms as small pure functions) → [`scene`] (TOML → typed scene) →
 //! [`render`] (assembles one frame: base mesh, shells layer by layer, fins).
 //!
-//! The output is an oracle: the same scene gives the same bytes for any thread count and any
-//! tile size, on every run.
+//! The output is an oracle: the same scene gives the same bytes for any thread count, any
+//! tile size and any [`simd`] level (the instruction set chosen at run time), on every run.
 #![warn(missing_docs)]
 
 pub mod camera;
@@ -25,5 +25,6 @@ pub mod render;
 pub mod robust;
 pub mod scene;
 pub mod shading;
+pub mod simd;
 pub mod sweep;
 pub mod text;

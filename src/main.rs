@@ -2,7 +2,7 @@
 //! compare and export for GPU implementations, view them in a window.
 //!
 //! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments, a scene over a resource
-//! limit), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
+//! limit, an unknown `PELAGE_SIMD` level), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
 
 mod cli;
 #[cfg(feature = "viewer")]
@@ -76,6 +76,12 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return argument_error(e),
     };
+    // An unknown `PELAGE_SIMD` is bad input, refused before any work (the library alone would
+    // ignore it and run the best level).
+    if let Err(e) = pelage::simd::SimdLevel::from_env() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let command = cli.command.unwrap_or(Command::Render(RenderArgs {
         common: CommonArgs::defaults(),
         output: PathBuf::from("pelage.png"),

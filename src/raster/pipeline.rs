@@ -13,6 +13,7 @@ use super::framebuffer::{Framebuffer, TileTarget};
 use super::setup::{CullMode, SetupTriangle, setup_triangle};
 use super::tile::{Fragment, PerFragment, QuadShader, RasterStats, rasterize_triangle};
 use super::varyings::Varyings;
+use crate::simd::{self, Kernel, SimdLevel};
 use glam::Vec4;
 use rayon::prelude::*;
 
@@ -67,7 +68,14 @@ impl Default for DrawState {
 
 /// A submitted draw with its closures erased, as the tile loop sees it.
 trait TileDraw: Send + Sync {
-    fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats);
+    /// Replays the draw's triangles over one tile, with the hot path compiled for `level`.
+    fn rasterize_tile(
+        &self,
+        tile: usize,
+        target: &mut TileTarget,
+        stats: &mut RasterStats,
+        level: SimdLevel,
+    );
     fn triangle_count(&self) -> usize;
 }
 
@@ -92,25 +100,68 @@ where
     V: Varyings,
     S: QuadShader<V>,
 {
-    fn rasterize_tile(&self, tile: usize, target: &mut TileTarget, stats: &mut RasterStats) {
-        for chunk in &self.chunks {
+    fn rasterize_tile(
+        &self,
+        tile: usize,
+        target: &mut TileTarget,
+        stats: &mut RasterStats,
+        level: SimdLevel,
+    ) {
+        // The one run-time choice of instruction set: once per tile and draw.
+        simd::dispatch(
+            level,
+            TileReplay {
+                draw: self,
+                tile,
+                target,
+                stats,
+            },
+        );
+    }
+
+    fn triangle_count(&self) -> usize {
+        self.chunks.iter().map(|c| c.triangles.len()).sum()
+    }
+}
+
+/// One draw's triangles replayed over one tile: the hot path (quad traversal, depth test,
+/// fragment stage, blend), inlined whole into each [`simd`] level's copy.
+struct TileReplay<'r, V, S> {
+    draw: &'r DrawCall<V, S>,
+    tile: usize,
+    target: &'r mut TileTarget,
+    stats: &'r mut RasterStats,
+}
+
+impl<V, S> Kernel for TileReplay<'_, V, S>
+where
+    V: Varyings,
+    S: QuadShader<V>,
+{
+    type Output = ();
+
+    #[inline(always)]
+    fn run(self) {
+        let TileReplay {
+            draw,
+            tile,
+            target,
+            stats,
+        } = self;
+        for chunk in &draw.chunks {
             for &t in &chunk.bins[tile] {
                 let t = t as usize;
                 stats.triangles += 1;
                 rasterize_triangle(
                     &chunk.triangles[t],
                     &chunk.varyings[t],
-                    &self.state,
-                    &self.shader,
+                    &draw.state,
+                    &draw.shader,
                     target,
                     stats,
                 );
             }
         }
-    }
-
-    fn triangle_count(&self) -> usize {
-        self.chunks.iter().map(|c| c.triangles.len()).sum()
     }
 }
 
@@ -132,17 +183,31 @@ pub struct Frame<'fb, 'a> {
     pending: Vec<Box<dyn TileDraw + 'a>>,
     pending_triangles: usize,
     stats: RasterStats,
+    simd: SimdLevel,
 }
 
 impl<'fb, 'a> Frame<'fb, 'a> {
-    /// Starts a frame; the framebuffer keeps its contents (clear it first if needed).
+    /// Starts a frame; the framebuffer keeps its contents (clear it first if needed). It runs at
+    /// [`SimdLevel::active`].
     pub fn new(framebuffer: &'fb mut Framebuffer) -> Self {
         Frame {
             framebuffer,
             pending: Vec::new(),
             pending_triangles: 0,
             stats: RasterStats::default(),
+            simd: SimdLevel::active(),
         }
+    }
+
+    /// Runs the rasterization of this frame at `level`, capped by what the CPU has
+    /// ([`SimdLevel::capped`]). Every level gives the same image; this chooses the speed.
+    pub fn set_simd_level(&mut self, level: SimdLevel) {
+        self.simd = level.capped();
+    }
+
+    /// The level this frame rasterizes at.
+    pub fn simd_level(&self) -> SimdLevel {
+        self.simd
     }
 
     /// The framebuffer's tile layout.
@@ -243,6 +308,7 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             return;
         }
         let draws = &self.pending;
+        let level = self.simd;
         let per_tile: Vec<RasterStats> = self
             .framebuffer
             .tiles_mut()
@@ -251,7 +317,7 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             .map(|(i, target)| {
                 let mut stats = RasterStats::default();
                 for draw in draws {
-                    draw.rasterize_tile(i, target, &mut stats);
+                    draw.rasterize_tile(i, target, &mut stats, level);
                 }
                 stats
             })

@@ -119,6 +119,11 @@ impl<'q, V: Varyings> Quad<'q, V> {
 /// Contract: the colour given for lane `k` depends only on the quad and the lane — never on
 /// which other lanes are in `lanes` — so a quad shader gives the same pixels as shading each
 /// lane alone.
+///
+/// Speed: the rasterizer runs a tile's quads in a copy compiled for the frame's
+/// [`crate::simd::SimdLevel`]; mark `shade_quad` `#[inline(always)]` (and what it calls hot,
+/// `#[inline(always)]` or `#[inline]`) so that the fragment stage lands in that copy too, rather
+/// than in one baseline function out of line.
 pub trait QuadShader<V>: Send + Sync {
     /// Shades the lanes whose bits are set in `lanes` (bit k = lane k is covered and passed the
     /// depth test) and calls `write(k, colour)` for each lane it keeps; a lane not written is
@@ -135,7 +140,7 @@ where
     V: Varyings,
     F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
 {
-    #[inline]
+    #[inline(always)]
     fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, mut write: impl FnMut(usize, Vec4)) {
         for lane in 0..4 {
             if lanes & (1 << lane) != 0
@@ -171,7 +176,9 @@ impl std::ops::AddAssign for RasterStats {
 /// The common fixed-function states are compiled into their own copies of the quad loop, so the
 /// per-fragment depth test, depth write and blend carry no run-time dispatch; every other state
 /// takes the general copy. All copies compute the same values.
-#[inline]
+/// `#[inline(always)]`, as is the quad loop: the whole path lands in each [`crate::simd`] level's
+/// copy of the tile replay.
+#[inline(always)]
 pub(crate) fn rasterize_triangle<V, S>(
     tri: &SetupTriangle,
     varyings: &[V; 3],

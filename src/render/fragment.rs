@@ -528,7 +528,10 @@ pub fn shade_fur(
 /// Shades the lanes of one quad set in `lanes` (see [`QuadShader`]): lane by lane the same bits
 /// as [`shade_fur`]. The level of detail of the quad's coarse derivatives is computed once, and
 /// the lit lanes' powers go through [`shading::strand_lighting_x4`] together.
-#[inline]
+///
+/// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
+/// the rasterizer's tile replay.
+#[inline(always)]
 pub fn shade_fur_quad(
     quad: &Quad<'_, FurVaryings>,
     lanes: u32,
@@ -621,7 +624,7 @@ pub struct FurShader<'a> {
 }
 
 impl QuadShader<FurVaryings> for FurShader<'_> {
-    #[inline]
+    #[inline(always)]
     fn shade_quad(
         &self,
         quad: &Quad<'_, FurVaryings>,

@@ -23,6 +23,7 @@ use crate::raster::{
     Framebuffer, RasterError, RasterStats, Sampler, Texture,
 };
 use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
+use crate::simd::SimdLevel;
 use fragment::{FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, ShadeParams};
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
@@ -458,7 +459,20 @@ impl PreparedScene {
     /// Draws one frame at `time` (seconds) with the given tile size. Frame `k` of an animation
     /// at `fps` frames per second is `render_at(k as f32 / fps as f32, …)`.
     pub fn render_at(&self, time: f32, tile_size: u32) -> Result<RenderedImage, RenderError> {
-        self.draw(&self.scene, time, tile_size, FragmentStage::Quad)
+        self.render_at_simd(time, tile_size, SimdLevel::active())
+    }
+
+    /// [`Self::render_at`] at a chosen [`SimdLevel`] (capped by what the CPU has): the same bytes
+    /// at every level, only the speed differs. `Scalar` runs the fur fragment stage's scalar
+    /// twin; the other levels run the quad stage. [`Self::render_at`] runs at
+    /// [`SimdLevel::active`] (the environment variable `PELAGE_SIMD`).
+    pub fn render_at_simd(
+        &self,
+        time: f32,
+        tile_size: u32,
+        level: SimdLevel,
+    ) -> Result<RenderedImage, RenderError> {
+        self.draw(&self.scene, time, tile_size, stage_at(level), level)
     }
 
     /// [`Self::render_at`] with the fur fragment stage's scalar twin ([`fragment::shade_fur`],
@@ -468,7 +482,13 @@ impl PreparedScene {
         time: f32,
         tile_size: u32,
     ) -> Result<RenderedImage, RenderError> {
-        self.draw(&self.scene, time, tile_size, FragmentStage::ScalarTwin)
+        self.draw(
+            &self.scene,
+            time,
+            tile_size,
+            FragmentStage::ScalarTwin,
+            SimdLevel::active(),
+        )
     }
 
     /// One frame of `s`, whose seed, mesh and fur are those of the bake (see [`Self::render_with`]).
@@ -478,6 +498,7 @@ impl PreparedScene {
         time: f32,
         tile_size: u32,
         stage: FragmentStage,
+        level: SimdLevel,
     ) -> Result<RenderedImage, RenderError> {
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
@@ -510,6 +531,7 @@ impl PreparedScene {
         let max_shell = n - 1;
         let lod = self.level_of_detail(s, moved.unwrap_or(Vec3::ZERO));
         let mut frame = Frame::new(&mut fb);
+        frame.set_simd_level(level);
 
         // The skin: opaque, writes depth; charred where the fur burns.
         let skin_colour = s.fur.colour * 0.35;
@@ -1046,6 +1068,14 @@ impl PreparedScene {
     }
 }
 
+/// The fur fragment stage a level runs: the scalar twin at `Scalar`, the quad stage above.
+fn stage_at(level: SimdLevel) -> FragmentStage {
+    match level {
+        SimdLevel::Scalar => FragmentStage::ScalarTwin,
+        _ => FragmentStage::Quad,
+    }
+}
+
 impl PreparedScene {
     /// `settings` with this bake's seed, mesh, fur and base folder: the scene that
     /// [`Self::render_with`] draws, which [`PreparedScene::new`] would bake to the same textures.
@@ -1074,7 +1104,8 @@ impl PreparedScene {
             &self.with_draw_settings(settings),
             time,
             tile_size,
-            FragmentStage::Quad,
+            stage_at(SimdLevel::active()),
+            SimdLevel::active(),
         )
     }
 }

@@ -1,0 +1,242 @@
+//! Wide code paths chosen at run time: the one place where pelage picks an instruction set.
+//!
+//! The release build targets plain x86-64 (SSE2), so every 4-lane operation of the rasterizer
+//! and the fragment stage is an SSE2 instruction. A [`Kernel`] — the rasterizer's replay of one
+//! draw's triangles over one tile, with the quad traversal and the fragment stage it calls, all
+//! inlined — is compiled once more for x86-64-v3 with `#[target_feature]`, and [`dispatch`]
+//! runs the copy of the [`SimdLevel`] asked for, once per tile and draw, never per fragment.
+//! The body stays ordinary Rust; only the instruction selection differs (VEX encoding,
+//! three-operand forms, `blendv` for selects, BMI shifts).
+//!
+//! No AVX-512 copy: one was built (x86-64-v3 plus AVX-512 F, BW, DQ, VL, CD) and gave the same
+//! bytes, but took 24 % *more* CPU time than the baseline on thesis-4-2 (README, "Where the time
+//! goes"), so it was removed.
+//!
+//! Invariant: **every level gives the same bytes.** Every copy runs the same IEEE operations in
+//! the same order: Rust never contracts `a·b + c` into a fused multiply-add (LLVM fuses only on
+//! an explicit `mul_add`, which no fragment code calls: `src/shading/lanes.rs` forbids it, and
+//! the crates below — glam, wide, libm — choose their code paths by compile-time `cfg`, which is
+//! the same baseline in every copy), never reassociates a sum, and approximate reciprocals are
+//! never used. `tests/simd_levels.rs` renders scenes at every level this machine has and compares
+//! the bytes; `.ci/run` reruns the golden tests at the baseline after the run at the best level.
+//!
+//! The level is the best the CPU has ([`SimdLevel::detected`]), capped by the environment
+//! variable `PELAGE_SIMD` (`scalar`, `sse2`, `avx2`; [`SimdLevel::active`]), or set
+//! per frame ([`crate::raster::Frame::set_simd_level`]). `scalar` also makes the renderer run the
+//! fur fragment stage's scalar twin (one fragment at a time) instead of the quad stage; the
+//! rasterizer's own quad traversal then runs at the baseline. A cap above what the CPU has runs
+//! the best it has. On other architectures than x86-64 only the baseline exists.
+
+use std::fmt;
+use std::sync::OnceLock;
+
+/// The environment variable that caps the level: `scalar`, `sse2` (alias `baseline`) or
+/// `avx2`.
+pub const SIMD_ENV: &str = "PELAGE_SIMD";
+
+/// An instruction-set level of the hot path, from the narrowest. Levels are ordered: a cap
+/// keeps every level up to it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SimdLevel {
+    /// The baseline build with the fur fragment stage's scalar twin, one fragment at a time.
+    Scalar,
+    /// The baseline build (SSE2 on x86-64; the target's own baseline elsewhere).
+    Sse2,
+    /// x86-64-v3: AVX2, FMA (never used for fragment arithmetic), BMI1/2, LZCNT, POPCNT, MOVBE.
+    Avx2,
+}
+
+/// An unknown value of [`SIMD_ENV`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{SIMD_ENV}={value:?} is not a SIMD level: expected scalar, sse2 or avx2")]
+pub struct SimdLevelError {
+    /// The value given.
+    pub value: String,
+}
+
+impl SimdLevel {
+    /// Every level, narrowest first.
+    pub const ALL: [SimdLevel; 3] = [SimdLevel::Scalar, SimdLevel::Sse2, SimdLevel::Avx2];
+
+    /// The name [`SIMD_ENV`] takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            SimdLevel::Scalar => "scalar",
+            SimdLevel::Sse2 => "sse2",
+            SimdLevel::Avx2 => "avx2",
+        }
+    }
+
+    /// The best level this CPU runs (detected once, then cached).
+    pub fn detected() -> SimdLevel {
+        static DETECTED: OnceLock<SimdLevel> = OnceLock::new();
+        *DETECTED.get_or_init(|| {
+            if x86::has_avx2() {
+                SimdLevel::Avx2
+            } else {
+                SimdLevel::Sse2
+            }
+        })
+    }
+
+    /// Every level this CPU runs, narrowest first (always `Scalar` and `Sse2`).
+    pub fn available() -> Vec<SimdLevel> {
+        let best = SimdLevel::detected();
+        SimdLevel::ALL.into_iter().filter(|&l| l <= best).collect()
+    }
+
+    /// This level as a cap: itself, or the best the CPU has when that is lower.
+    pub fn capped(self) -> SimdLevel {
+        self.min(SimdLevel::detected())
+    }
+
+    /// The cap [`SIMD_ENV`] sets: `Ok(None)` when unset or empty, an error for an unknown value.
+    pub fn from_env() -> Result<Option<SimdLevel>, SimdLevelError> {
+        match std::env::var(SIMD_ENV) {
+            Ok(value) if value.trim().is_empty() => Ok(None),
+            Ok(value) => value.parse().map(Some),
+            Err(std::env::VarError::NotPresent) => Ok(None),
+            Err(std::env::VarError::NotUnicode(value)) => Err(SimdLevelError {
+                value: value.to_string_lossy().into_owned(),
+            }),
+        }
+    }
+
+    /// The level frames run at by default: [`SimdLevel::detected`] capped by [`SIMD_ENV`], read
+    /// once per process. An unknown value of the variable is ignored here (the best level runs);
+    /// the `pelage` command line refuses it first, with exit status 2.
+    pub fn active() -> SimdLevel {
+        static ACTIVE: OnceLock<SimdLevel> = OnceLock::new();
+        *ACTIVE.get_or_init(|| match SimdLevel::from_env() {
+            Ok(Some(cap)) => cap.capped(),
+            Ok(None) | Err(_) => SimdLevel::detected(),
+        })
+    }
+}
+
+impl fmt::Display for SimdLevel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SimdLevel {
+    type Err = SimdLevelError;
+
+    /// A level's name, any case, surrounding blanks ignored; `baseline` names `sse2`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let name = s.trim().to_ascii_lowercase();
+        match name.as_str() {
+            "scalar" => Ok(SimdLevel::Scalar),
+            "sse2" | "baseline" => Ok(SimdLevel::Sse2),
+            "avx2" => Ok(SimdLevel::Avx2),
+            _ => Err(SimdLevelError {
+                value: s.to_string(),
+            }),
+        }
+    }
+}
+
+/// A piece of hot code compiled once per level: its [`Kernel::run`] must be `#[inline(always)]`,
+/// as must everything hot it calls (or be generic and small enough that LLVM inlines it), so
+/// that the whole body lands in each level's copy. A function left out of line runs the baseline.
+pub trait Kernel {
+    /// What the kernel returns.
+    type Output;
+    /// The body. Mark it `#[inline(always)]`.
+    fn run(self) -> Self::Output;
+}
+
+/// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
+/// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline.
+#[inline(always)]
+pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if level >= SimdLevel::Avx2 && x86::has_avx2() {
+            // SAFETY: the features `x86::avx2` enables were detected on this CPU just above.
+            return unsafe { x86::avx2(kernel) };
+        }
+    }
+    let _ = level;
+    kernel.run()
+}
+
+/// The x86-64 copies and their feature tests (`is_x86_feature_detected!` caches its answer).
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::Kernel;
+
+    /// x86-64-v3.
+    pub(super) fn has_avx2() -> bool {
+        is_x86_feature_detected!("avx2")
+            && is_x86_feature_detected!("fma")
+            && is_x86_feature_detected!("bmi1")
+            && is_x86_feature_detected!("bmi2")
+            && is_x86_feature_detected!("lzcnt")
+            && is_x86_feature_detected!("popcnt")
+            && is_x86_feature_detected!("movbe")
+    }
+
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+    pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
+        kernel.run()
+    }
+}
+
+/// Elsewhere only the baseline exists.
+#[cfg(not(target_arch = "x86_64"))]
+mod x86 {
+    pub(super) fn has_avx2() -> bool {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Sum<'a>(&'a [f32]);
+
+    impl Kernel for Sum<'_> {
+        type Output = f32;
+        #[inline(always)]
+        fn run(self) -> f32 {
+            // A left-to-right sum of products: any contraction or reassociation would show.
+            self.0.iter().fold(0.0, |s, &x| s + x * 1.1)
+        }
+    }
+
+    #[test]
+    fn names_round_trip_and_unknown_names_are_refused() {
+        for level in SimdLevel::ALL {
+            assert_eq!(level.name().parse::<SimdLevel>(), Ok(level));
+            assert_eq!(level.to_string().to_uppercase().parse(), Ok(level));
+        }
+        assert_eq!(" baseline ".parse(), Ok(SimdLevel::Sse2));
+        let e = "avx512".parse::<SimdLevel>().unwrap_err();
+        assert!(e.to_string().contains("\"avx512\""), "{e}");
+    }
+
+    #[test]
+    fn levels_are_capped_by_the_cpu() {
+        let best = SimdLevel::detected();
+        assert_eq!(SimdLevel::Avx2.capped(), best);
+        assert_eq!(SimdLevel::Scalar.capped(), SimdLevel::Scalar);
+        assert!(SimdLevel::available().contains(&SimdLevel::Sse2));
+        assert_eq!(SimdLevel::available().last(), Some(&best));
+    }
+
+    #[test]
+    fn every_level_gives_the_same_bits() {
+        let values: Vec<f32> = (0..1000).map(|i| (i as f32 * 0.37).sin() * 1e3).collect();
+        let baseline = dispatch(SimdLevel::Sse2, Sum(&values));
+        for level in SimdLevel::ALL {
+            assert_eq!(
+                dispatch(level, Sum(&values)).to_bits(),
+                baseline.to_bits(),
+                "{level}"
+            );
+        }
+    }
+}

@@ -1,0 +1,128 @@
+//! The SIMD level is a speed choice, never an image choice: scenes render to the same bytes at
+//! every level this machine has (`pelage::simd`), through the same cap `PELAGE_SIMD` sets, and
+//! the `pelage` binary refuses an unknown level with exit status 2 and gives identical files at
+//! every level.
+
+mod common;
+use common::{pelage, scene, scratch};
+
+use pelage::render::PreparedScene;
+use pelage::simd::SimdLevel;
+
+/// Scenes that between them take every path of the fragment stage: shadows and wind, spots,
+/// burning, density and length maps, three tangents, level of detail, fins.
+const SCENES: &[(&str, f32)] = &[
+    ("thesis-4-2", 0.0),
+    ("spots", 0.0),
+    ("burn", 3.0),
+    ("density", 0.0),
+    ("painted-length", 0.0),
+    ("specular", 0.0),
+    ("lod-flyaway", 2.0),
+    ("face", 0.0),
+];
+
+#[test]
+fn every_level_renders_the_same_bytes() {
+    let levels = SimdLevel::available();
+    eprintln!("levels on this machine: {levels:?}");
+    for &(name, time) in SCENES {
+        let s = scene(name, 160, 120);
+        let prepared = PreparedScene::new(&s).expect("prepares");
+        let reference = prepared
+            .render_at_simd(time, 32, SimdLevel::Sse2)
+            .expect("renders")
+            .rgba8;
+        for &level in &levels {
+            let image = prepared
+                .render_at_simd(time, 32, level)
+                .expect("renders")
+                .rgba8;
+            let differing = image
+                .chunks(4)
+                .zip(reference.chunks(4))
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differing, 0, "{name} at {level}: {differing} pixels differ");
+        }
+    }
+}
+
+#[test]
+fn a_cap_above_the_cpu_runs_the_best_it_has() {
+    assert_eq!(SimdLevel::Avx2.capped(), SimdLevel::detected());
+    let s = scene("torus", 64, 48);
+    let prepared = PreparedScene::new(&s).expect("prepares");
+    let best = prepared
+        .render_at_simd(0.0, 64, SimdLevel::detected())
+        .expect("renders");
+    let above = prepared
+        .render_at_simd(0.0, 64, SimdLevel::Avx2)
+        .expect("renders");
+    assert!(best.rgba8 == above.rgba8);
+}
+
+/// Runs `pelage` with `PELAGE_SIMD` set.
+fn pelage_at(level: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .env("PELAGE_SIMD", level)
+        .args(args)
+        .output()
+        .expect("pelage runs")
+}
+
+#[test]
+fn the_binary_gives_the_same_file_at_every_level() {
+    let dir = scratch("levels");
+    let mut files = Vec::new();
+    for level in ["scalar", "sse2", "avx2", "baseline", ""] {
+        let out = dir.join(format!("{level}.png"));
+        let o = pelage_at(
+            level,
+            &[
+                "render",
+                "--width",
+                "120",
+                "--height",
+                "90",
+                "-o",
+                out.to_str().expect("utf-8 path"),
+            ],
+        );
+        assert!(
+            o.status.success(),
+            "{level}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        files.push(std::fs::read(&out).expect("png"));
+    }
+    assert!(files.iter().all(|f| f == &files[0]), "levels differ");
+    // Without the variable: the same as with it unset.
+    let plain = dir.join("plain.png");
+    let o = pelage(&[
+        "render",
+        "--width",
+        "120",
+        "--height",
+        "90",
+        "-o",
+        plain.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success());
+    assert!(std::fs::read(&plain).expect("png") == files[0]);
+}
+
+#[test]
+fn an_unknown_level_is_refused_with_exit_status_2() {
+    let out = scratch("unknown").join("x.png");
+    let o = pelage_at(
+        "avx512",
+        &["render", "-o", out.to_str().expect("utf-8 path")],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("PELAGE_SIMD=\"avx512\""), "{err}");
+    assert!(err.contains("scalar, sse2 or avx2"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!out.exists());
+}
