@@ -2,8 +2,9 @@
 // of src/render/fragment.rs (`shade_fur`), term by term. Every function carries the name of the
 // Rust function it mirrors (src/shading/*.rs) and the thesis equation it implements, so a
 // difference between the backends can be traced to one term. Differences that remain by design:
-// GPU `pow`, `exp`, `log2`, `sin` instead of libm; the sampler's trilinear filter instead of the
-// oracle's f32 one for the fur textures (the surface maps are read with the oracle's weights,
+// GPU `exp`, `log2`, `sin` and lod_alpha's `pow` instead of libm (the lobes' powers are pelage's
+// own pow01, as in the oracle); the sampler's trilinear filter instead of the oracle's f32 one
+// for the fur textures (the surface maps are read with the oracle's weights,
 // `sample_map`); non-finite inputs are not sanitised (valid scenes never produce them).
 
 // ---- uniforms ---------------------------------------------------------------------------
@@ -90,17 +91,84 @@ fn saturate01(x: f32) -> f32 {
     return 0.0;
 }
 
-// pow01: saturate(base)^max(exponent, 0), 0^0 = 1.
+// high12: a float's sign, exponent and 11 high mantissa bits (numeric.rs HIGH_12_BITS): the
+// product of two such floats is exact.
+fn high12(v: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(v) & 0xfffff000u);
+}
+
+// pow01 (numeric.rs pow01, its scalar twin): saturate(base)^max(exponent, 0), 0^0 = 1, as
+// 2^(y·log2 x) with pelage's own polynomials, not the GPU's pow: the same operations in the
+// same order, so the same bits where the GPU's arithmetic is IEEE and it does not contract
+// a·b + c into a fused multiply-add (GPUs may, and may flush subnormals: within the GPU
+// tolerance). round() is the oracle's (t + 1.5·2^23) − 1.5·2^23: nearest, ties to even.
 fn pow01(base: f32, exponent: f32) -> f32 {
-    let b = saturate01(base);
-    let p = max(exponent, 0.0);
-    if (p == 0.0) {
+    let x = saturate01(base);
+    let y = max(exponent, 0.0);
+    if (y == 0.0) {
         return 1.0;
     }
-    if (b <= 0.0) {
+    if (x <= 0.0) {
         return 0.0;
     }
-    return pow(b, p);
+    if (x >= 1.0) {
+        return 1.0;
+    }
+    // log2 x = lh + ll: x = 2^e·m, m in [√½, √2), log2 m = c·s + s³·Q(s²), s = (m − 1)/(m + 1).
+    var xs = x;
+    var bias = 0.0;
+    if (x < 0x1p-126f) {
+        xs = x * 0x1p23f;
+        bias = -23.0;
+    }
+    let bits = bitcast<i32>(xs);
+    let k = (bits - 0x3f3504f3) >> 23u;
+    let m = bitcast<f32>(bits - (k << 23u));
+    let e = f32(k) + bias;
+    let u = m - 1.0;
+    let rv = 1.0 / (m + 1.0);
+    let s = u * rv;
+    let sh = high12(s);
+    let mh = high12(m);
+    let ml = m - mh;
+    let sl = (((u - sh) - sh * mh) - sh * ml) * rv;
+    let z = s * s;
+    let q = 0.96179825 + z * (0.57675403 + z * 0.43095794);
+    let tail = (s * z) * q;
+    let rh = 2.8847656 * sh;
+    let rl = (0.0006244568 * s + 2.8847656 * sl) + tail;
+    let r = rh + rl;
+    let r_low = rl - (r - rh);
+    let lh = e + r;
+    let ll = (r - (lh - e)) + r_low;
+    // t = y·L = th + tl, th exact.
+    let yh = high12(y);
+    let yl = y - yh;
+    let lhh = high12(lh);
+    let lhl = lh - lhh;
+    let th = yh * lhh;
+    let tl = (yh * lhl + yl * lh) + y * ll;
+    let t = th + tl;
+    if (!(t >= -151.0)) {
+        return 0.0;
+    }
+    // 2^t = 2^n·(1 + f·P(f)).
+    let n = round(max(t, -152.0));
+    var whole = i32(n);
+    let f = (th - n) + tl;
+    var p = 0.00015353342;
+    p = 0.0013398901 + f * p;
+    p = 0.009618438 + f * p;
+    p = 0.055503324 + f * p;
+    p = 0.24022648 + f * p;
+    p = 0.6931472 + f * p;
+    let fraction = 1.0 + f * p;
+    var scale = 1.0;
+    if (whole < -125) {
+        whole = whole + 64;
+        scale = 0x1p-64f;
+    }
+    return bitcast<f32>(bitcast<i32>(fraction) + (whole << 23u)) * scale;
 }
 
 fn smoothstep01(t0: f32) -> f32 {

@@ -255,7 +255,7 @@ impl BurnState {
                 .map(|n| n.normalize_or_zero().dot(m))
                 .fold(f32::INFINITY, f32::min)
                 - 1.0e-5;
-            c > 0.0 && libm::powf(c.min(1.0), self.exponent) >= needed
+            c > 0.0 && shading::light_spot_lobe(c, self.exponent) >= needed
         })
     }
 

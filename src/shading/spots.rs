@@ -58,8 +58,9 @@ pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
 ///
 /// Derivation: `bound = (level·(1 − 10⁻³))^(1/exponent)` in f64, rounded down to f32, so the
 /// exact lobe of any smaller cosine is at least 10⁻³ (relative) under `level`, far more than the
-/// error of `powf` (under 1 ulp). With nothing safe to promise (`level ≤ 0`, NaN, an exponent
-/// that is not positive) the bound is −∞: no cosine is skipped.
+/// error of the lobe's power (at most 8 ulp for normal results, `numeric::pow01_x4`). With
+/// nothing safe to promise (`level ≤ 0`, NaN, an exponent that is not positive) the bound is
+/// −∞: no cosine is skipped.
 pub fn light_spot_cosine_below(level: f32, exponent: f32) -> f32 {
     if !(level > 0.0 && exponent > 0.0) {
         return f32::NEG_INFINITY;
