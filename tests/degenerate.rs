@@ -80,7 +80,7 @@ fn huge_coordinates() {
     render_obj("huge", far, [6e18, 4e18, 8e18], "");
     // Farther, the view vector's length overflows f32: refused, never a background-only image.
     let text = scene(
-        &format!("kind = \"obj\"\npath = \"huge.obj\""),
+        "kind = \"obj\"\npath = \"huge.obj\"",
         [3e30, 2e30, 4e30],
         "",
     );
