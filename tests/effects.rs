@@ -129,8 +129,14 @@ fn one_strand_scene(dir: &std::path::Path, seed: u32, bend: &str) -> pelage::sce
                vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0\n\
                f 1/1 4/4 3/3\nf 1/1 3/3 2/2\n";
     std::fs::write(dir.join("plane.obj"), obj).expect("write plane");
+    // A leading `time = …` line of `bend` is a top-level key.
+    let (top, bend) = match bend.strip_prefix("time") {
+        Some(_) => bend.split_once('\n').unwrap_or((bend, "")),
+        None => ("", bend),
+    };
     let text = format!(
         r#"seed = {seed}
+{top}
 [image]
 width = 256
 height = 256
@@ -190,7 +196,11 @@ fn wind_and_gravity_move_a_single_strand_once() {
     let wind = "[wind]\ndirection = [1.0, 0.0, 0.0]\nstrength = 0.8\nfrequency = 0.0\n\
                 elasticity = 0.0\nmax_bend = 0.6\n";
     let gravity = "[gravity]\ndirection = [1.0, 0.0, 0.0]\nstrength = 0.35\n";
-    for bend in [wind, gravity] {
+    // The object moves 1 along −x and back by 1 s, then rests where it started: at 1.1 s its fur
+    // still lags on the spring, with the strand's root where it was at rest.
+    let motion = "time = 1.1\n[motion]\npath = [[0.0, 0.0, 0.0, 0.0], [0.5, -1.0, 0.0, 0.0], \
+                  [1.0, 0.0, 0.0, 0.0]]\nfrequency = 1.5\ndamping = 0.2\nresponse = 1.0\n";
+    for bend in [wind, gravity, motion] {
         // A seed whose strand lies well inside the plane, so no part of it wraps over the tile.
         let found = (1..64).find_map(|seed| {
             let still = one_strand_scene(&dir, seed, "");
@@ -207,9 +217,16 @@ fn wind_and_gravity_move_a_single_strand_once() {
         // sideways by bend · h, the bend being the wind's force or the gravity's strength.
         let n = scene.fur.number_of_shells as f32;
         let h = (n - 1.0) / n * scene.fur.model_difference;
-        let bend_sine = match &scene.wind {
-            Some(w) => w.direction_and_force(0.0).1,
-            None => scene.gravity.as_ref().map_or(0.0, |g| g.strength),
+        let bend_sine = match (&scene.wind, &scene.gravity, &scene.motion) {
+            (Some(w), _, _) => w.direction_and_force(0.0).1,
+            (None, Some(g), _) => g.strength,
+            (None, None, Some(m)) => {
+                let lag = pelage::shading::spring_lag(&m.path, scene.time, m.frequency, m.damping)
+                    * m.response;
+                assert!(lag.x > 0.05 && lag.x < 1.0, "the lag leans right: {lag}");
+                lag.x
+            }
+            _ => 0.0,
         };
         let sideways = bend_sine * h;
         // The layer sits at height √(h² − sideways²) after the pull; seen from 100 units above
@@ -218,6 +235,10 @@ fn wind_and_gravity_move_a_single_strand_once() {
         let focal = 128.0 / (1.4f32.to_radians()).tan();
         let expected = sideways * focal / (100.0 - height);
         let measured = moved_right as f32 - still_right as f32;
+        eprintln!(
+            "{} moved {measured} px, model {expected:.2} px",
+            bend.lines().next().unwrap_or("")
+        );
         assert!(
             (measured - expected).abs() <= 1.0,
             "{bend}: the top layer moved {measured} px, the model says {expected:.2} px"
