@@ -559,3 +559,48 @@ fn pipes_devices_and_folders_are_refused_as_inputs_before_they_are_opened() {
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+#[test]
+fn frame_times_past_the_time_range_are_refused_before_work() {
+    let dir = scratch("fps");
+    let scene = write(&dir, "s.toml", "[image]\nwidth = 16\nheight = 12\n");
+    let frames = dir.join("frames");
+    refused(
+        &[
+            "render",
+            scene.to_str().expect("path"),
+            "--frames",
+            "1000",
+            "--fps",
+            "0.0001",
+            "-o",
+            frames.to_str().expect("path"),
+        ],
+        "past the largest time",
+    );
+    assert!(!frames.exists());
+}
+
+#[test]
+fn a_stripe_period_lost_to_precision_is_refused() {
+    // On the torus (points up to 8.4 from the origin) a period of 1e-5 is 840,000 periods:
+    // f32 cannot place the bands any more, which painted the whole object.
+    let dir = scratch("stripe");
+    let scene = write(
+        &dir,
+        "s.toml",
+        "[image]\nwidth = 16\nheight = 12\n[[stripes]]\nkind = \"axis\"\nperiod = 1e-5\n\
+         width = 5e-6\nsoftness = 1e-6\n",
+    );
+    let png = dir.join("s.png");
+    refused(
+        &[
+            "render",
+            scene.to_str().expect("path"),
+            "-o",
+            png.to_str().expect("path"),
+        ],
+        "stripes[0].period",
+    );
+    assert!(!png.exists());
+}

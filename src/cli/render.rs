@@ -142,6 +142,17 @@ fn render_animation(
             args.fps
         )));
     }
+    // Frame k is the instant k / fps: the last one must lie in the scene's time range.
+    let last = frames.saturating_sub(1) as f32 / args.fps;
+    if !(last.is_finite() && last <= pelage::scene::MAX_TIME) {
+        return Err(Failure::bad_input(format!(
+            "--fps {}: frame {} would be at {last} s, past the largest time, {} s; raise --fps \
+             or render fewer --frames",
+            args.fps,
+            frames.saturating_sub(1),
+            pelage::scene::MAX_TIME
+        )));
+    }
     // The GIF may go inside the frame folder, which exists only once the frames are written.
     let gif_inside = args
         .animation

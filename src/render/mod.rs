@@ -43,6 +43,41 @@ pub enum RenderError {
     /// A surface map could not be loaded.
     #[error(transparent)]
     Map(#[from] maps::MapError),
+    /// A scene value whose effect is lost on this mesh (e.g. to f32 precision).
+    #[error("{key}: {message}")]
+    Scene {
+        /// The dotted scene key.
+        key: String,
+        /// Why.
+        message: String,
+    },
+}
+
+/// The most stripe periods across the object an axis stripe may have: past this, a band's
+/// position within its period keeps under 7 of f32's 24 bits and the bands dissolve.
+pub const MAX_STRIPE_PERIODS: f32 = 65536.0;
+
+/// Refuses an axis stripe whose period is too small for f32 to resolve over `radius` (the
+/// largest distance of a skin point from the origin, where the stripe coordinate is measured).
+fn check_stripes(scene: &Scene, radius: f32) -> Result<(), RenderError> {
+    for (k, stripe) in scene.stripes.iter().enumerate() {
+        if stripe.kind != crate::scene::StripeKind::Axis {
+            continue;
+        }
+        let periods = radius / stripe.period();
+        if periods.is_nan() || periods > MAX_STRIPE_PERIODS {
+            return Err(RenderError::Scene {
+                key: format!("stripes[{k}].period"),
+                message: format!(
+                    "stripes[{k}].period = {} is too small for this mesh: its points lie up to \
+                     {radius} from the origin, {periods:.3e} periods, more than f32 can place \
+                     bands in ({MAX_STRIPE_PERIODS})",
+                    stripe.period()
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 impl RenderError {
@@ -386,6 +421,13 @@ impl PreparedScene {
         crate::raster::framebuffer::check_size(scene.image.width, scene.image.height)?;
         let (mesh, warnings) = build_mesh(scene)?;
         let mesh = inset(mesh, scene.fur.skin_inset());
+        let radius = mesh
+            .vertices
+            .iter()
+            .map(|v| v.position.length())
+            .fold(0.0f32, f32::max)
+            + scene.fur.fur_length();
+        check_stripes(scene, radius)?;
         let tile = tile_world_size(&mesh, scene.fur.texture_repeat);
         let params = fur_params(scene, tile);
         let maps = SurfaceMaps::load(&scene.maps, &scene.base_dir)?;

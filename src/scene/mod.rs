@@ -12,6 +12,9 @@ use std::path::{Path, PathBuf};
 
 pub use validate::Limits;
 
+/// The largest `time` a scene (or an animation's last frame) may have, seconds, either sign.
+pub const MAX_TIME: f32 = 1.0e6;
+
 /// The furred torus of thesis figure 3.1, embedded so `pelage render` works with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/torus.toml");
 /// Largest scene file accepted, bytes (a scene is a few hundred bytes; this only stops a

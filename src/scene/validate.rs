@@ -288,7 +288,7 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         range_f32(key, v, 0.0, 100.0)?;
     }
 
-    range_f32("time", scene.time, -1.0e6, 1.0e6)?;
+    range_f32("time", scene.time, -super::MAX_TIME, super::MAX_TIME)?;
     for (k, spot) in scene.spots.iter().enumerate() {
         let key = |name: &str| format!("spots[{k}].{name}");
         colour(&key("colour"), spot.colour)?;
