@@ -4,7 +4,6 @@
 mod common;
 
 use glam::{Vec2, Vec3};
-use pelage::camera::Camera;
 use pelage::mesh::{self, Mesh};
 use pelage::render::{PreparedScene, RenderedImage};
 use pelage::scene::{FinSelectionSetting, Scene};
@@ -65,14 +64,7 @@ fn outer_shell_outline(r: &FinRenders) -> Vec<OutlineSegment> {
     let uvs: Vec<Vec2> = skin.vertices.iter().map(|v| v.uv).collect();
     let outer = Mesh::from_parts(&positions, &uvs, skin.indices.clone()).expect("outer shell");
     let edges = mesh::edges(&outer);
-    let camera = Camera {
-        eye: s.camera.eye,
-        target: s.camera.target,
-        up: s.camera.up,
-        fov_y_deg: s.camera.fov_y_deg,
-        near: s.camera.near,
-        far: s.camera.far,
-    };
+    let camera = pelage::export::camera(s);
     let (w, h) = (s.image.width as f32, s.image.height as f32);
     let view_proj = camera.view_projection(w / h);
     let project = |p: Vec3| {

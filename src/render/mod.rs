@@ -306,6 +306,14 @@ pub fn fin_fade(windows: &[[f32; 2]], to_eye: Vec3, normal: Vec3) -> f32 {
 /// darker, with none 7–22 % paler.
 pub const FIN_SHADOW_REACH: f32 = 0.2;
 
+/// A fin's axes over the edge from `a` to `b`: x along the edge, z the averaged vertex normal
+/// made perpendicular to it (zero when they are parallel or degenerate).
+fn fin_axes(a: &mesh::Vertex, b: &mesh::Vertex) -> (Vec3, Vec3) {
+    let x = (b.position - a.position).normalize_or_zero();
+    let up = (a.normal + b.normal).normalize_or_zero();
+    (x, (up - x * up.dot(x)).normalize_or_zero())
+}
+
 /// The fins' layer: they stand for the fur's full height, so they burn as the top shell does;
 /// their self-shadow is that of the shell [`FIN_SHADOW_REACH`] below the tips.
 fn fin_layer_params(s: &Scene) -> LayerParams {
@@ -889,9 +897,7 @@ impl PreparedScene {
                 .iter()
                 .map(|l| match (vertex(l.from), vertex(l.to)) {
                     (Some(a), Some(b)) => {
-                        let x = (b.position - a.position).normalize_or_zero();
-                        let up = (a.normal + b.normal).normalize_or_zero();
-                        let z = (up - x * up.dot(x)).normalize_or_zero();
+                        let (x, z) = fin_axes(a, b);
                         let middle = place((a.position + b.position) * 0.5);
                         mesh::fins::fin_facing(x, z, eye - middle)
                     }
@@ -919,9 +925,7 @@ impl PreparedScene {
                 let length = along.length();
                 let (u0, u1) = (u, u + length * per_length);
                 u = u1;
-                let x = along.normalize_or_zero();
-                let up = (a.normal + b.normal).normalize_or_zero();
-                let z = (up - x * up.dot(x)).normalize_or_zero();
+                let (x, z) = fin_axes(a, b);
                 if length == 0.0 || z == Vec3::ZERO {
                     continue;
                 }

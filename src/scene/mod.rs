@@ -863,8 +863,7 @@ fn debug_kind(kind: MeshKind) -> &'static str {
 /// A `[mesh]` key the text sets that has no effect under the mesh's kind (a `path` on a torus,
 /// a `radius` on an OBJ), as `mesh.KEY`. A value equal to the default is let through: a scene
 /// written back by pelage (`to_toml`, the viewer's screenshots) lists every key.
-fn unused_mesh_key(text: &str, mesh: &MeshSettings) -> Option<String> {
-    let source: toml::Table = text.parse().ok()?;
+fn unused_mesh_key(source: &toml::Table, mesh: &MeshSettings) -> Option<String> {
     let given = source.get("mesh")?.as_table()?;
     let defaults = toml::Value::try_from(MeshSettings::default()).ok()?;
     let used = mesh_keys(mesh.kind);
@@ -896,8 +895,7 @@ fn same_as_f32(a: &toml::Value, b: &toml::Value) -> bool {
 /// The first array in the scene text longer than the value it was read into (the key, the
 /// number of values given and taken), found by comparing the text's arrays with the parsed
 /// scene written back: a fixed-size value (a vector, a colour, a pair) takes exactly its size.
-fn longer_arrays(text: &str, scene: &Scene) -> Option<(String, usize, usize)> {
-    let source: toml::Table = text.parse().ok()?;
+fn longer_arrays(source: &toml::Table, scene: &Scene) -> Option<(String, usize, usize)> {
     let typed = toml::Value::try_from(scene).ok()?;
     fn walk(
         source: &toml::Value,
@@ -925,7 +923,9 @@ fn longer_arrays(text: &str, scene: &Scene) -> Option<(String, usize, usize)> {
             _ => None,
         }
     }
-    walk(&toml::Value::Table(source), &typed, "")
+    source
+        .iter()
+        .find_map(|(name, value)| typed.get(name).and_then(|t| walk(value, t, name)))
 }
 
 impl Scene {
@@ -954,14 +954,17 @@ impl Scene {
         scene.base_dir = base_dir.to_path_buf();
         // Fixed-size values take exactly their size: `direction = [1, 0, 0, 9]` would otherwise
         // be read as its first three numbers (serde stops reading), the rest silently dropped.
-        if let Some((key, given, taken)) = longer_arrays(text, &scene) {
+        // The text as plain TOML, for the checks the typed scene cannot make (it parsed, so
+        // this does too).
+        let source: toml::Table = text.parse().unwrap_or_default();
+        if let Some((key, given, taken)) = longer_arrays(&source, &scene) {
             return Err(SceneError {
                 file: file.to_string(),
                 line: validate::line_of_key(text, &key),
                 message: format!("{key} takes exactly {taken} values, {given} are given"),
             });
         }
-        if let Some(key) = unused_mesh_key(text, &scene.mesh) {
+        if let Some(key) = unused_mesh_key(&source, &scene.mesh) {
             return Err(SceneError {
                 file: file.to_string(),
                 line: validate::line_of_key(text, &key),
