@@ -214,3 +214,54 @@ fn help_and_version_still_succeed() {
         assert!(!out.stdout.is_empty(), "{args:?}");
     }
 }
+
+/// Memory reserved is memory counted: a render runs within an address-space limit
+/// (`ulimit -v`) of twice its memory estimate. The scene is a dense torus (10⁶ triangles, most
+/// covering no pixel) under 8 shells: the pipeline once reserved room for every submitted
+/// triangle of every pending draw, ten times the estimate, and aborted here.
+#[test]
+fn a_render_runs_within_twice_its_memory_estimate_of_address_space() {
+    use pelage::limits;
+    let dir = scratch("address-space");
+    let text = "[image]\nwidth = 320\nheight = 240\n\
+                [mesh]\nkind = \"torus\"\nmodel_resolution = 1000000\n\
+                [fur]\nnumber_of_strands = 200\nnumber_of_shells = 8\ntexture_resolution = 32\n";
+    let scene_path = dir.join("dense.toml");
+    std::fs::write(&scene_path, text).expect("write scene");
+    let scene = pelage::scene::Scene::parse(text, "dense.toml", &dir).expect("valid scene");
+    let work = limits::Workload {
+        threads: 2,
+        ..limits::Workload::default()
+    };
+    let estimate = limits::estimate_memory(&scene, limits::mesh_size(&scene).expect("size"), &work);
+    let set_up = estimate
+        .parts
+        .iter()
+        .find(|(name, _)| name.starts_with("set-up triangles"))
+        .expect("set-up part")
+        .1;
+    assert!(
+        set_up > estimate.total() / 2,
+        "the set-up triangles dominate the estimate: {estimate:?}"
+    );
+    let limit_kib = 2 * estimate.total() / 1024;
+    let output = dir.join("dense.png");
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" render \"$1\" -o \"$2\" --threads 2",
+        ))
+        .arg(env!("CARGO_BIN_EXE_pelage"))
+        .arg(&scene_path)
+        .arg(&output)
+        .output()
+        .expect("bash runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "render under ulimit -v {limit_kib} KiB (estimate {}): status {:?}\n{err}",
+        limits::format_bytes(estimate.total()),
+        out.status
+    );
+    assert!(output.is_file(), "no image written");
+}

@@ -270,6 +270,11 @@ impl<'fb, 'a> Frame<'fb, 'a> {
         let chunks: Vec<SetUpChunk<V>> = triangles
             .par_chunks(chunk_len)
             .map(|chunk| {
+                // Room for every triangle of the chunk while it is set up (one draw's worth at
+                // a time, which the memory estimate of `crate::limits` counts), trimmed below
+                // to what is kept: most of a dense mesh's triangles are culled, clipped away or
+                // cover no sample, and room kept for every submitted triangle of every pending
+                // draw was address space far above the estimate (an abort under `ulimit -v`).
                 let mut set_up = SetUpChunk {
                     triangles: Vec::with_capacity(chunk.len()),
                     varyings: Vec::with_capacity(chunk.len()),
@@ -285,6 +290,11 @@ impl<'fb, 'a> Frame<'fb, 'a> {
                             set_up.varyings.push(v);
                         }
                     });
+                }
+                set_up.triangles.shrink_to_fit();
+                set_up.varyings.shrink_to_fit();
+                for bin in &mut set_up.bins {
+                    bin.shrink_to_fit();
                 }
                 set_up
             })
