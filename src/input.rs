@@ -109,6 +109,19 @@ pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputErro
         .into_rgba8())
 }
 
+/// The width and height of an image file, read from its header without decoding it, and the
+/// file's size in bytes; the file is checked as [`read_image`] checks it.
+pub fn image_size(path: &Path, what: &str) -> Result<((u32, u32), u64), InputError> {
+    let bytes = check_regular_file(path, MAX_IMAGE_FILE_BYTES, what)?;
+    let file = open(path, MAX_IMAGE_FILE_BYTES, what)?;
+    let size = image::ImageReader::new(std::io::BufReader::new(file.take(MAX_IMAGE_FILE_BYTES)))
+        .with_guessed_format()
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?
+        .into_dimensions()
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    Ok((size, bytes))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,6 +143,12 @@ mod tests {
         assert!(big.message.contains("13 bytes"), "{big}");
         assert_eq!(read(&file, 13, "table").expect("fits"), b"0123456789abc");
         assert!(read_text(&file, 13, "table").is_ok());
+        let png = dir.join("wide.png");
+        image::RgbaImage::new(7, 3).save(&png).expect("write png");
+        let ((w, h), bytes) = image_size(&png, "image").expect("header");
+        assert_eq!((w, h), (7, 3));
+        assert_eq!(bytes, std::fs::metadata(&png).expect("size").len());
+        assert!(image_size(&file, "image").is_err());
         let missing = read(&dir.join("none"), 10, "map").unwrap_err();
         assert!(missing.to_string().contains("none"), "{missing}");
         let _ = std::fs::remove_dir_all(&dir);

@@ -60,6 +60,12 @@ const SETUP_TRIANGLE_BYTES: u64 = 160 + 3 * 88 + 8; // set-up triangle, varyings
 const EDGE_BYTES_PER_TRIANGLE: u64 = 180; // ~1.5 edges per triangle with their face lists
 const OBJ_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 3 * 48 + 64; // tobj faces, index map, copies
 const OBJ_BYTES_PER_ATTRIBUTE: u64 = 12 + 12; // tobj's copy and ours
+/// Bytes of one exported skin vertex: position, normal, tangent, uv, binormal, ∂p/∂u, ∂p/∂v.
+const EXPORT_SKIN_VERTEX_BYTES: u64 = 12 + 12 + 16 + 8 + 12 + 12 + 12;
+/// Bytes `pelage compare` holds per pixel of the larger image: both images in RGBA8 and in
+/// floating point, FLIP's filtered colour and feature planes, its error map and the heat maps
+/// (87 measured at 1024² and 2048², rounded up for what the metrics may add).
+pub const COMPARE_BYTES_PER_PIXEL: u64 = 112;
 /// Set-up triangles are kept until this many are pending (the rasterizer's auto-flush).
 const PENDING_TRIANGLES: u64 = 1 << 20;
 
@@ -121,6 +127,9 @@ pub struct Workload {
     pub keep_frames: bool,
     /// Worker threads (bake grids are built one per thread).
     pub threads: u32,
+    /// Whether the frame is exported (`pelage export`): the glTF buffer of the skin and every
+    /// shell layer, and each texture's copy as it is encoded, are held too.
+    pub export: bool,
 }
 
 impl Default for Workload {
@@ -129,6 +138,7 @@ impl Default for Workload {
             frames: 1,
             keep_frames: false,
             threads: 1,
+            export: false,
         }
     }
 }
@@ -240,6 +250,19 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
                 .saturating_add(product(&[pending, SETUP_TRIANGLE_BYTES])),
         ),
     ];
+    if work.export {
+        parts.push((
+            "the exported meshes (mesh vertices × fur.number_of_shells, glTF)",
+            // Each attribute is flattened, then copied into the buffer: twice its size.
+            product(&[
+                mesh.vertices,
+                2 * (EXPORT_SKIN_VERTEX_BYTES + (shells + 1) * 12),
+            ])
+            .saturating_add(product(&[mesh.triangles, 2 * 12]))
+            // The largest texture level copied out for encoding, and its PNG.
+            .saturating_add(product(&[res, res, 2 * 4])),
+        ));
+    }
     if mesh.file_attributes > 0 || scene.mesh.kind == MeshKind::Obj {
         parts.push((
             "reading the OBJ file",
@@ -277,11 +300,66 @@ pub fn bake_work(scene: &Scene) -> u64 {
     }
 }
 
+/// The memory of `pelage compare` over images of `a` and `b` pixels (width × height, read from
+/// their headers) held in files of `file_bytes` together: the files, and
+/// [`COMPARE_BYTES_PER_PIXEL`] per pixel of the larger image.
+pub fn compare_memory(a: (u32, u32), b: (u32, u32), file_bytes: u64) -> MemoryEstimate {
+    let pixels = |(w, h): (u32, u32)| u64::from(w) * u64::from(h);
+    MemoryEstimate {
+        parts: vec![
+            ("the image files", file_bytes),
+            (
+                "the images and the metrics' planes (width × height of the larger image)",
+                product(&[pixels(a).max(pixels(b)), COMPARE_BYTES_PER_PIXEL]),
+            ),
+        ],
+    }
+}
+
+/// The memory of building a sweep's contact sheet of `sheet` pixels (width × height) from
+/// `thumbnails` pixels of thumbnails, decoding one point image of at most `largest_point`
+/// pixels at a time: the sheet, its PNG, the thumbnails kept, one decoded point image and its
+/// file.
+pub fn contact_sheet_memory(sheet: u64, thumbnails: u64, largest_point: u64) -> MemoryEstimate {
+    MemoryEstimate {
+        parts: vec![
+            (
+                "the contact sheet and its PNG (points × thumbnails)",
+                product(&[sheet, 4 + 4]),
+            ),
+            ("the contact sheet's thumbnails", product(&[thumbnails, 4])),
+            (
+                "the point image being scaled down, and its file",
+                product(&[largest_point, 4 + 4]),
+            ),
+        ],
+    }
+}
+
+/// Checks an estimate made outside a render (`compare`, a contact sheet) against `limit`.
+pub fn check_memory(
+    task: &'static str,
+    estimate: MemoryEstimate,
+    limit: u64,
+) -> Result<MemoryEstimate, LimitError> {
+    if estimate.total() > limit {
+        Err(LimitError::Memory {
+            task,
+            estimate,
+            limit,
+        })
+    } else {
+        Ok(estimate)
+    }
+}
+
 /// A render refused because it would need more than a limit allows.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum LimitError {
     /// The memory estimate exceeds the limit.
     Memory {
+        /// What needs it: "the render", "the comparison", "the contact sheet".
+        task: &'static str,
         /// The estimate.
         estimate: MemoryEstimate,
         /// The limit, bytes.
@@ -299,11 +377,15 @@ pub enum LimitError {
 impl fmt::Display for LimitError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LimitError::Memory { estimate, limit } => {
+            LimitError::Memory {
+                task,
+                estimate,
+                limit,
+            } => {
                 let (part, bytes) = estimate.largest();
                 write!(
                     f,
-                    "the render needs about {} of memory, more than the limit of {} (largest part: {part}, {})",
+                    "{task} needs about {} of memory, more than the limit of {} (largest part: {part}, {})",
                     format_bytes(estimate.total()),
                     format_bytes(*limit),
                     format_bytes(bytes)
@@ -328,13 +410,12 @@ pub fn check(
     max_memory: u64,
     max_bake_work: u64,
 ) -> Result<MemoryEstimate, LimitError> {
-    let estimate = estimate_memory(scene, mesh, work);
-    if estimate.total() > max_memory {
-        return Err(LimitError::Memory {
-            estimate,
-            limit: max_memory,
-        });
-    }
+    let task = if work.export {
+        "the export"
+    } else {
+        "the render"
+    };
+    let estimate = check_memory(task, estimate_memory(scene, mesh, work), max_memory)?;
     let bake = bake_work(scene);
     if bake > max_bake_work {
         return Err(LimitError::BakeWork {
@@ -443,7 +524,7 @@ mod tests {
         let work = Workload {
             frames: 2000,
             keep_frames: true,
-            threads: 1,
+            ..Workload::default()
         };
         let err = check(
             &s,
@@ -467,6 +548,51 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(err, LimitError::BakeWork { .. }), "{err}");
+    }
+
+    #[test]
+    fn an_export_needs_more_than_the_render_and_compare_and_sheets_are_estimated() {
+        let s = scene("[fur]\nnumber_of_shells = 64\n");
+        let size = mesh_size(&s).expect("procedural");
+        let render = estimate_memory(&s, size, &Workload::default());
+        let export = estimate_memory(
+            &s,
+            size,
+            &Workload {
+                export: true,
+                ..Workload::default()
+            },
+        );
+        let extra = export.total() - render.total();
+        // At least every shell's positions, 12 bytes per vertex per layer.
+        assert!(extra >= size.vertices * 64 * 12, "{extra}");
+        let err = check(
+            &s,
+            size,
+            &Workload {
+                export: true,
+                ..Workload::default()
+            },
+            render.total(),
+            u64::MAX,
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().starts_with("the export needs about"),
+            "{err}"
+        );
+        // Compare: the larger image counts, whatever the other.
+        let c = compare_memory((2048, 2048), (16, 16), 1000);
+        assert_eq!(c.total(), 1000 + 2048 * 2048 * COMPARE_BYTES_PER_PIXEL);
+        let err = check_memory("the comparison", c, 256 << 20).unwrap_err();
+        assert!(
+            err.to_string().starts_with("the comparison needs about"),
+            "{err}"
+        );
+        let sheet = contact_sheet_memory(1000, 100, 10);
+        assert_eq!(sheet.total(), 8000 + 400 + 80);
+        assert!(check_memory("the contact sheet", sheet.clone(), 8480).is_ok());
+        assert!(check_memory("the contact sheet", sheet, 8479).is_err());
     }
 
     #[test]

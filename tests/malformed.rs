@@ -124,6 +124,25 @@ fn bad_command_lines_are_refused_naming_the_argument() {
     let missing_dir = dir.join("no/such/folder/x.png");
     let missing_dir = missing_dir.to_str().expect("utf-8 path");
     let d = dir.to_str().expect("utf-8 path");
+    let shell_textures = corpus().join("memory-shell-textures.toml");
+    let shell_textures = shell_textures.to_str().expect("utf-8 path").to_string();
+    let bake_work = corpus().join("bake-work.toml");
+    let bake_work = bake_work.to_str().expect("utf-8 path").to_string();
+    let thousand_seeds = format!(
+        "seed={}",
+        (1..=1000)
+            .map(|s| s.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    // Two 1024² images: a comparison needs over 100 MiB, known from their headers.
+    let [big_a, big_b] = ["a", "b"].map(|name| {
+        let path = dir.join(format!("{name}.png"));
+        image::RgbaImage::new(1024, 1024)
+            .save(&path)
+            .expect("write png");
+        path.to_str().expect("utf-8 path").to_string()
+    });
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["render", "--width", "abc", "-o", png], "--width"),
         (vec!["render", "--width", "-5", "-o", png], "--width"),
@@ -182,6 +201,47 @@ fn bad_command_lines_are_refused_naming_the_argument() {
         ),
         (vec!["bench", "--frames", "0"], "--frames"),
         (vec!["bench", "--max-memory", "1M"], "--max-memory"),
+        // Every command that renders applies render's estimates, before any work.
+        (
+            vec!["export", &shell_textures, "-o", frames],
+            "the export needs about",
+        ),
+        (
+            vec!["export", &bake_work, "-o", frames],
+            "baking the fur needs about",
+        ),
+        (
+            vec!["view", &shell_textures, "--frames", "1"],
+            "the render needs about",
+        ),
+        (
+            vec![
+                "sweep",
+                "--param",
+                "fur.number_of_shells=4,256",
+                "--param",
+                "fur.texture_resolution=2048",
+                "-o",
+                frames,
+            ],
+            "point 1 (fur.number_of_shells=256 fur.texture_resolution=2048)",
+        ),
+        (
+            vec![
+                "sweep",
+                "--param",
+                &thousand_seeds,
+                "--max-memory",
+                "300M",
+                "-o",
+                frames,
+            ],
+            "the contact sheet needs about",
+        ),
+        (
+            vec!["compare", &big_a, &big_b, "--max-memory", "64M"],
+            "the comparison needs about",
+        ),
     ];
     let mut failures = Vec::new();
     for (args, expect) in &cases {
@@ -264,4 +324,35 @@ fn a_render_runs_within_twice_its_memory_estimate_of_address_space() {
         out.status
     );
     assert!(output.is_file(), "no image written");
+
+    // The comparison of two 1024² images with both maps, within twice its estimate.
+    let [a, b] = ["a", "b"].map(|name| {
+        let path = dir.join(format!("{name}.png"));
+        image::RgbaImage::from_fn(1024, 1024, |x, y| {
+            image::Rgba([x as u8, y as u8, (x ^ y) as u8, 255])
+        })
+        .save(&path)
+        .expect("write png");
+        path
+    });
+    let files = std::fs::metadata(&a).expect("a").len() + std::fs::metadata(&b).expect("b").len();
+    let estimate = limits::compare_memory((1024, 1024), (1024, 1024), files).total();
+    let limit_kib = 2 * estimate / 1024;
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" compare \"$1\" \"$2\" --heatmap \"$3\" \
+             --flip-map \"$4\"",
+        ))
+        .arg(env!("CARGO_BIN_EXE_pelage"))
+        .args([&a, &b, &dir.join("heat.png"), &dir.join("flip.png")])
+        .env("RAYON_NUM_THREADS", "2")
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "compare under ulimit -v {limit_kib} KiB: status {:?}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

@@ -27,6 +27,10 @@ pub struct CompareArgs {
     /// Write FLIP's error map (magma colours) here.
     #[arg(long)]
     pub flip_map: Option<PathBuf>,
+    /// Refuse images whose comparison would need more than this memory (8G, 512M, bytes;
+    /// default 8G), estimated from their headers before they are decoded.
+    #[arg(long, value_name = "SIZE", value_parser = super::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 fn load(path: &Path) -> Result<image::RgbaImage, Failure> {
@@ -36,6 +40,23 @@ fn load(path: &Path) -> Result<image::RgbaImage, Failure> {
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
     let tolerance =
         Tolerance::parse(&args.tolerance).map_err(|e| Failure::bad_input(format!("--{e}")))?;
+    // Sizes from the headers: the memory the comparison needs is checked before decoding.
+    let size = |path: &Path| {
+        pelage::input::image_size(path, "image").map_err(|e| Failure::bad_input(e.to_string()))
+    };
+    let ((a_size, a_bytes), (b_size, b_bytes)) = (size(&args.reference)?, size(&args.test)?);
+    let estimate = pelage::limits::compare_memory(a_size, b_size, a_bytes.saturating_add(b_bytes));
+    pelage::limits::check_memory(
+        "the comparison",
+        estimate,
+        super::max_memory(args.max_memory),
+    )
+    .map_err(|e| {
+        super::limit_failure(
+            &format!("{} and {}", args.reference.display(), args.test.display()),
+            e,
+        )
+    })?;
     let a = load(&args.reference)?;
     let b = load(&args.test)?;
     let comparison = compare_images(&a, &b, &tolerance).map_err(|e| {

@@ -3,7 +3,7 @@
 //! written whole or not at all ([`StagedFolder`]).
 
 use super::staged::{EntryRule, StagedFolder};
-use super::{CommonArgs, Failure, load_scene, spinner, with_threads};
+use super::{CommonArgs, Failure, check_workload, load_scene, spinner, with_threads};
 use clap::Args;
 use pelage::export::{ExportError, export};
 use pelage::render::PreparedScene;
@@ -20,6 +20,14 @@ pub struct ExportArgs {
 
 pub fn run(args: ExportArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
+    check_workload(
+        &scene,
+        &args.common,
+        pelage::limits::Workload {
+            export: true,
+            ..pelage::limits::Workload::default()
+        },
+    )?;
     let folder = StagedFolder::create(&args.output, export_folder_entries())?;
     let dir = folder.path().to_path_buf();
     let summary = with_threads(args.common.threads, || {

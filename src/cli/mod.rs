@@ -221,28 +221,50 @@ pub fn check_limits(
     frames: u32,
     keep_frames: bool,
 ) -> Result<(), Failure> {
+    check_workload(
+        scene,
+        args,
+        pelage::limits::Workload {
+            frames,
+            keep_frames,
+            ..pelage::limits::Workload::default()
+        },
+    )
+    .map(|_| ())
+}
+
+/// [`check_limits`] for any workload (an export, a sweep's point); the thread count is taken
+/// from `--threads` (all cores without it). Returns the estimate.
+pub fn check_workload(
+    scene: &Scene,
+    args: &CommonArgs,
+    work: pelage::limits::Workload,
+) -> Result<pelage::limits::MemoryEstimate, Failure> {
     use pelage::limits;
-    let name = scene_name(args);
     let mesh = limits::mesh_size(scene).map_err(|e| Failure::bad_input(e.to_string()))?;
     let threads = match args.threads {
         Some(n) => n,
         None => u32::try_from(rayon::current_num_threads()).unwrap_or(u32::MAX),
     };
-    let work = limits::Workload {
-        frames,
-        keep_frames,
-        threads,
-    };
-    let max_memory = args.max_memory.unwrap_or(limits::DEFAULT_MAX_MEMORY);
+    let work = limits::Workload { threads, ..work };
     let max_work = args.max_work.unwrap_or(limits::DEFAULT_MAX_BAKE_WORK);
-    limits::check(scene, mesh, &work, max_memory, max_work).map_err(|e| {
-        let flag = match e {
-            limits::LimitError::Memory { .. } => "--max-memory",
-            limits::LimitError::BakeWork { .. } => "--max-work",
-        };
-        Failure::bad_input(format!("{name}: {e}; raise the limit with {flag}"))
-    })?;
-    Ok(())
+    limits::check(scene, mesh, &work, max_memory(args.max_memory), max_work)
+        .map_err(|e| limit_failure(&scene_name(args), e))
+}
+
+/// `--max-memory`, or the default limit.
+pub fn max_memory(flag: Option<u64>) -> u64 {
+    flag.unwrap_or(pelage::limits::DEFAULT_MAX_MEMORY)
+}
+
+/// A refusal by a limit, for `name` (the scene or the files at fault), naming the flag that
+/// raises it.
+pub fn limit_failure(name: &str, e: pelage::limits::LimitError) -> Failure {
+    let flag = match e {
+        pelage::limits::LimitError::Memory { .. } => "--max-memory",
+        pelage::limits::LimitError::BakeWork { .. } => "--max-work",
+    };
+    Failure::bad_input(format!("{name}: {e}; raise the limit with {flag}"))
 }
 
 /// Runs `work` on a pool of `threads` workers (all cores when `None`).

@@ -49,6 +49,10 @@ pub struct MergeArgs {
     /// The shards' output folders (each with its results.csv and point PNGs).
     #[arg(required = true)]
     pub shards: Vec<PathBuf>,
+    /// Refuse a contact sheet whose memory estimate exceeds this size (8G, 512M, bytes;
+    /// default 8G).
+    #[arg(long, value_name = "SIZE", value_parser = super::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 pub fn run(args: SweepArgs) -> Result<(), Failure> {
@@ -85,6 +89,22 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         apply_overrides(&mut scene, &args.common, &name)?;
         scenes.push((point.clone(), scene));
     }
+    // So is every point's memory and bake work, and the contact sheet's memory: nothing is
+    // rendered when one would not fit.
+    for (point, scene) in &scenes {
+        super::check_workload(scene, &args.common, pelage::limits::Workload::default()).map_err(
+            |f| Failure {
+                message: format!("point {} ({}): {}", point.index, point.label(), f.message),
+                ..f
+            },
+        )?;
+    }
+    let sizes: Vec<(u32, u32)> = scenes
+        .iter()
+        .map(|(_, s)| (s.image.width, s.image.height))
+        .collect();
+    let max_memory = super::max_memory(args.common.max_memory);
+    check_sheet(&sizes, parameters.len() + 1, max_memory, &name)?;
     create_folder(&args.output)?;
     let tile = args.common.tile;
     let frames = args.frames;
@@ -157,7 +177,7 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         },
     )??;
     let names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
-    write_summary(&args.output, &names, &rows)
+    write_summary(&args.output, &names, &rows, max_memory)
 }
 
 pub fn merge(args: MergeArgs) -> Result<(), Failure> {
@@ -189,7 +209,47 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
                 .map_err(|e| Failure::other(e.to_string()))?;
         }
     }
-    write_summary(&args.output, &names, &rows)
+    write_summary(
+        &args.output,
+        &names,
+        &rows,
+        super::max_memory(args.max_memory),
+    )
+}
+
+/// Refuses a contact sheet of renders of `sizes`, labelled with `label_lines` lines each, that
+/// would need more memory than `max_memory` (see [`pelage::limits::contact_sheet_memory`]);
+/// `name` says whose sheet it is.
+fn check_sheet(
+    sizes: &[(u32, u32)],
+    label_lines: usize,
+    max_memory: u64,
+    name: &str,
+) -> Result<(), Failure> {
+    let Some(layout) = sweep::SheetLayout::new(sizes, label_lines) else {
+        return Ok(());
+    };
+    let (w, h) = layout.sheet_size();
+    let thumbnails = sizes.iter().fold(0u64, |sum, &size| {
+        let (w, h) = layout.thumbnail_size(size);
+        sum.saturating_add(u64::from(w) * u64::from(h))
+    });
+    let largest = sizes
+        .iter()
+        .map(|&(w, h)| u64::from(w) * u64::from(h))
+        .max()
+        .unwrap_or(0);
+    let estimate = pelage::limits::contact_sheet_memory(w.saturating_mul(h), thumbnails, largest);
+    pelage::limits::check_memory("the contact sheet", estimate, max_memory)
+        .map(|_| ())
+        .map_err(|e| {
+            let flag = "--max-memory";
+            Failure::bad_input(format!(
+                "{name}: {e} ({} points in a {w}×{h} sheet); raise the limit with {flag} or \
+                 sweep fewer points",
+                sizes.len()
+            ))
+        })
 }
 
 /// The metrics `--against-oracle` adds to a row.
@@ -291,28 +351,52 @@ fn create_folder(dir: &Path) -> Result<(), Failure> {
     })
 }
 
-/// results.csv, the contact sheet (from the point PNGs in `dir`) and the fps plot.
-fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(), Failure> {
+/// results.csv, the contact sheet (from the point PNGs in `dir`) and the fps plot. The sheet's
+/// memory is checked against `max_memory` from the images' headers, and each image is scaled
+/// to its thumbnail as soon as it is read, so only the thumbnails are held.
+fn write_summary(
+    dir: &Path,
+    names: &[String],
+    rows: &[ResultRow],
+    max_memory: u64,
+) -> Result<(), Failure> {
     let csv = sweep::write_results(names, rows).map_err(|e| Failure::other(e.0))?;
     pelage::output::write_atomic(&dir.join("results.csv"), csv.as_bytes())
         .map_err(|e| Failure::other(e.to_string()))?;
-    let mut cells = Vec::new();
+    let mut found = Vec::new();
     for row in rows {
         let path = dir.join(point_file(row.point));
-        let Ok(image) = pelage::input::read_image(&path, "point image") else {
-            eprintln!(
+        match pelage::input::image_size(&path, "point image") {
+            Ok((size, _)) => found.push((row, path, size)),
+            Err(_) => eprintln!(
                 "warning: {}: missing or unreadable, left off the contact sheet",
                 path.display()
-            );
-            continue;
-        };
-        let mut label: Vec<String> = names
-            .iter()
-            .zip(&row.values)
-            .map(|(n, v)| format!("{n}={v}"))
-            .collect();
-        label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
-        cells.push((image, label));
+            ),
+        }
+    }
+    let sizes: Vec<(u32, u32)> = found.iter().map(|&(_, _, size)| size).collect();
+    let label_lines = names.len() + 1;
+    check_sheet(&sizes, label_lines, max_memory, &dir.display().to_string())?;
+    let mut cells = Vec::new();
+    if let Some(layout) = sweep::SheetLayout::new(&sizes, label_lines) {
+        for (row, path, _) in found {
+            let Ok(image) = pelage::input::read_image(&path, "point image") else {
+                eprintln!(
+                    "warning: {}: missing or unreadable, left off the contact sheet",
+                    path.display()
+                );
+                continue;
+            };
+            let thumbnail = layout.thumbnail(&image).into_owned();
+            drop(image);
+            let mut label: Vec<String> = names
+                .iter()
+                .zip(&row.values)
+                .map(|(n, v)| format!("{n}={v}"))
+                .collect();
+            label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
+            cells.push((thumbnail, label));
+        }
     }
     if let Some(sheet) = sweep::contact_sheet(&cells) {
         super::write_png(

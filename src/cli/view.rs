@@ -27,9 +27,43 @@ pub struct ViewArgs {
     pub orbit: f32,
 }
 
+/// The viewer's workload: a preview and a refining pool of `--threads` each, and the window's
+/// and a screenshot's copy of the frame (counted as two kept frames).
+fn view_workload() -> pelage::limits::Workload {
+    pelage::limits::Workload {
+        frames: 2,
+        keep_frames: true,
+        ..pelage::limits::Workload::default()
+    }
+}
+
 #[cfg(feature = "viewer")]
 pub fn run(args: ViewArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
+    let threads = match args.common.threads {
+        Some(n) => n,
+        None => u32::try_from(rayon::current_num_threads()).unwrap_or(u32::MAX),
+    };
+    let limits = crate::view::ViewLimits {
+        mesh: pelage::limits::mesh_size(&scene).map_err(|e| Failure::bad_input(e.to_string()))?,
+        work: pelage::limits::Workload {
+            threads: threads.saturating_mul(2),
+            ..view_workload()
+        },
+        max_memory: super::max_memory(args.common.max_memory),
+        max_work: args
+            .common
+            .max_work
+            .unwrap_or(pelage::limits::DEFAULT_MAX_BAKE_WORK),
+    };
+    pelage::limits::check(
+        &scene,
+        limits.mesh,
+        &limits.work,
+        limits.max_memory,
+        limits.max_work,
+    )
+    .map_err(|e| super::limit_failure(&super::scene_name(&args.common), e))?;
     if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
         return Err(Failure::bad_input(format!(
             "--fps {} must be in (0, 1000]",
@@ -56,13 +90,15 @@ pub fn run(args: ViewArgs) -> Result<(), Failure> {
             fps: args.fps,
             paused: args.paused,
             orbit_deg: args.orbit,
+            limits,
         },
     )
 }
 
 #[cfg(not(feature = "viewer"))]
 pub fn run(args: ViewArgs) -> Result<(), Failure> {
-    load_scene(&args.common)?;
+    let scene = load_scene(&args.common)?;
+    super::check_workload(&scene, &args.common, view_workload())?;
     Err(Failure::other(
         "this pelage was built without the viewer: rebuild with the cargo feature `viewer` \
          (on by default)",

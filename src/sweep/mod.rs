@@ -16,7 +16,7 @@ mod sheet;
 
 pub use csv::{ResultRow, merge_results, parse_results, write_results};
 pub use plot::fps_plot;
-pub use sheet::contact_sheet;
+pub use sheet::{SheetLayout, contact_sheet};
 
 use crate::scene::Scene;
 use std::path::Path;

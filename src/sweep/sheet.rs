@@ -3,6 +3,7 @@
 
 use crate::text;
 use image::{RgbaImage, imageops};
+use std::borrow::Cow;
 
 /// Thumbnail width in pixels (narrower renders are kept at their size).
 pub const THUMBNAIL_WIDTH: u32 = 320;
@@ -10,50 +11,119 @@ const GAP: u32 = 8;
 const BACKGROUND: [u8; 4] = [24, 24, 28, 255];
 const INK: [u8; 4] = [235, 235, 235, 255];
 
+/// Where the cells of a contact sheet go: `columns × rows` cells of a thumbnail
+/// `thumbnail_width` wide (the widest render, at most [`THUMBNAIL_WIDTH`]) and at most
+/// `thumbnail_height` high, a label of `label_lines` under each. Computed from the renders'
+/// sizes alone, so a sheet's memory is known before any render exists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SheetLayout {
+    /// Cells across.
+    pub columns: u32,
+    /// Cells down.
+    pub rows: u32,
+    /// Width of every thumbnail.
+    pub thumbnail_width: u32,
+    /// Height of the tallest thumbnail.
+    pub thumbnail_height: u32,
+    /// Label height under each thumbnail.
+    pub label_height: u32,
+}
+
+impl SheetLayout {
+    /// The layout of renders of `sizes` (width, height) in point order, each labelled with
+    /// `label_lines` lines; `None` when there is nothing. The grid has `ceil(sqrt(n))` columns.
+    pub fn new(sizes: &[(u32, u32)], label_lines: usize) -> Option<Self> {
+        let n = u32::try_from(sizes.len()).ok()?;
+        if n == 0 {
+            return None;
+        }
+        let columns = (1..=n)
+            .find(|&c| u64::from(c) * u64::from(c) >= u64::from(n))
+            .unwrap_or(n);
+        let thumbnail_width = sizes
+            .iter()
+            .map(|&(w, _)| w.min(THUMBNAIL_WIDTH))
+            .max()
+            .unwrap_or(1);
+        let thumbnail_height = sizes
+            .iter()
+            .map(|&size| thumbnail_height(size, thumbnail_width))
+            .max()
+            .unwrap_or(1);
+        let lines = u32::try_from(label_lines).unwrap_or(u32::MAX);
+        Some(SheetLayout {
+            columns,
+            rows: n.div_ceil(columns),
+            thumbnail_width,
+            thumbnail_height,
+            label_height: lines
+                .saturating_mul(text::LINE_HEIGHT as u32)
+                .saturating_add(4),
+        })
+    }
+
+    /// The sheet's width and height in pixels.
+    pub fn sheet_size(&self) -> (u64, u64) {
+        let cell_w = u64::from(self.thumbnail_width) + u64::from(GAP);
+        let cell_h =
+            u64::from(self.thumbnail_height) + u64::from(self.label_height) + u64::from(GAP);
+        (
+            u64::from(self.columns) * cell_w + u64::from(GAP),
+            u64::from(self.rows) * cell_h + u64::from(GAP),
+        )
+    }
+
+    /// The size of the thumbnail of a render of `size`.
+    pub fn thumbnail_size(&self, size: (u32, u32)) -> (u32, u32) {
+        (
+            self.thumbnail_width,
+            thumbnail_height(size, self.thumbnail_width),
+        )
+    }
+
+    /// The thumbnail of `render` (scaled with a triangle filter, which is deterministic; the
+    /// render itself when it has the thumbnail's size already).
+    pub fn thumbnail<'r>(&self, render: &'r RgbaImage) -> Cow<'r, RgbaImage> {
+        let (w, h) = self.thumbnail_size(render.dimensions());
+        if render.dimensions() == (w, h) {
+            Cow::Borrowed(render)
+        } else {
+            Cow::Owned(imageops::resize(
+                render,
+                w,
+                h,
+                imageops::FilterType::Triangle,
+            ))
+        }
+    }
+}
+
 /// Builds the sheet from `(render, label lines)` in point order; `None` when there is nothing.
 /// Thumbnails are scaled with a triangle filter, which is deterministic, and placed in a grid of
-/// `ceil(sqrt(n))` columns.
+/// `ceil(sqrt(n))` columns ([`SheetLayout`]). Renders already scaled by
+/// [`SheetLayout::thumbnail`] give the same sheet, so a caller can keep thumbnails only.
 pub fn contact_sheet(cells: &[(RgbaImage, Vec<String>)]) -> Option<RgbaImage> {
-    let n = cells.len() as u32;
-    if n == 0 {
-        return None;
-    }
-    let columns = (1..=n).find(|c| c * c >= n).unwrap_or(n);
-    let rows = n.div_ceil(columns);
-    let width = cells
-        .iter()
-        .map(|(im, _)| im.width().min(THUMBNAIL_WIDTH))
-        .max()
-        .unwrap_or(1);
-    let height = cells
-        .iter()
-        .map(|(im, _)| thumbnail_height(im, width))
-        .max()
-        .unwrap_or(1);
-    let lines = cells.iter().map(|(_, l)| l.len()).max().unwrap_or(0) as u32;
-    let label_height = lines * text::LINE_HEIGHT as u32 + 4;
-    let cell_w = width + GAP;
-    let cell_h = height + label_height + GAP;
+    let sizes: Vec<(u32, u32)> = cells.iter().map(|(im, _)| im.dimensions()).collect();
+    let lines = cells.iter().map(|(_, l)| l.len()).max().unwrap_or(0);
+    let layout = SheetLayout::new(&sizes, lines)?;
+    let (sheet_w, sheet_h) = layout.sheet_size();
     let mut sheet = RgbaImage::from_pixel(
-        columns * cell_w + GAP,
-        rows * cell_h + GAP,
+        u32::try_from(sheet_w).ok()?,
+        u32::try_from(sheet_h).ok()?,
         image::Rgba(BACKGROUND),
     );
+    let cell_w = layout.thumbnail_width + GAP;
+    let cell_h = layout.thumbnail_height + layout.label_height + GAP;
     for (i, (render, label)) in cells.iter().enumerate() {
-        let (cx, cy) = (i as u32 % columns, i as u32 / columns);
+        let (cx, cy) = (i as u32 % layout.columns, i as u32 / layout.columns);
         let (x, y) = (GAP + cx * cell_w, GAP + cy * cell_h);
-        let h = thumbnail_height(render, width);
-        let thumb = if render.width() == width && render.height() == h {
-            render.clone()
-        } else {
-            imageops::resize(render, width, h, imageops::FilterType::Triangle)
-        };
-        imageops::replace(&mut sheet, &thumb, i64::from(x), i64::from(y));
+        let thumb = layout.thumbnail(render);
+        imageops::replace(&mut sheet, thumb.as_ref(), i64::from(x), i64::from(y));
         for (k, line) in label.iter().enumerate() {
             text::draw(
                 &mut sheet,
                 x as i64,
-                (y + height + 3 + k as u32 * text::LINE_HEIGHT as u32) as i64,
+                (y + layout.thumbnail_height + 3 + k as u32 * text::LINE_HEIGHT as u32) as i64,
                 line,
                 INK,
             );
@@ -62,8 +132,8 @@ pub fn contact_sheet(cells: &[(RgbaImage, Vec<String>)]) -> Option<RgbaImage> {
     Some(sheet)
 }
 
-fn thumbnail_height(render: &RgbaImage, width: u32) -> u32 {
-    let scaled = u64::from(render.height()) * u64::from(width) / u64::from(render.width().max(1));
+fn thumbnail_height((w, h): (u32, u32), width: u32) -> u32 {
+    let scaled = u64::from(h) * u64::from(width) / u64::from(w.max(1));
     scaled.clamp(1, u64::from(u32::MAX)) as u32
 }
 
@@ -100,5 +170,17 @@ mod tests {
             .any(|y| (GAP..GAP + 30).any(|x| sheet.get_pixel(x, y).0 == INK));
         assert!(label_row);
         assert!(contact_sheet(&[]).is_none());
+        // Thumbnails made first give the same sheet, and the layout knows its size.
+        let layout = SheetLayout::new(&[(640, 480); 3], 1).expect("layout");
+        let thumbnails: Vec<(RgbaImage, Vec<String>)> = cells
+            .iter()
+            .map(|(im, l)| (layout.thumbnail(im).into_owned(), l.clone()))
+            .collect();
+        assert_eq!(thumbnails[0].0.dimensions(), (320, 240));
+        assert_eq!(contact_sheet(&thumbnails).expect("sheet"), sheet);
+        assert_eq!(
+            layout.sheet_size(),
+            (u64::from(sheet.width()), u64::from(sheet.height()))
+        );
     }
 }

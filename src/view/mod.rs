@@ -24,6 +24,8 @@ mod schedule;
 mod state;
 mod worker;
 
+pub use state::ViewLimits;
+
 use crate::cli::Failure;
 use font::Canvas;
 use input::{Action, Drag};
@@ -61,6 +63,8 @@ pub struct Options {
     pub paused: bool,
     /// In `frames` mode, orbit by this many degrees per frame.
     pub orbit_deg: f32,
+    /// The budgets every edit is checked against.
+    pub limits: ViewLimits,
 }
 
 /// The display the window would open on, or the reason there is none.
@@ -153,7 +157,7 @@ impl Viewer {
         .map_err(spawn_failed)?;
         let background = pack(scene.image.background.to_array().map(|c| (c * 255.0) as u8));
         let mut viewer = Viewer {
-            state: ViewState::new(scene, !options.paused),
+            state: ViewState::new(scene, !options.paused).with_limits(options.limits.clone()),
             options,
             width,
             height,

@@ -56,6 +56,21 @@ pub struct ViewState {
     burn: BurnSettings,
     spots: Vec<SpotSettings>,
     stripes: Vec<StripeSettings>,
+    limits: Option<ViewLimits>,
+}
+
+/// The budgets every edit is checked against, as `pelage render` checks a scene
+/// ([`pelage::limits`]): more shells or a finer texture must not bake past them.
+#[derive(Clone, Debug)]
+pub struct ViewLimits {
+    /// The mesh's size (the viewer does not change the mesh).
+    pub mesh: pelage::limits::MeshSize,
+    /// Threads and frames held.
+    pub work: pelage::limits::Workload,
+    /// Memory limit, bytes.
+    pub max_memory: u64,
+    /// Bake-work limit.
+    pub max_work: u64,
 }
 
 /// Spots for scenes that have none, so `s` always shows something: two light-based spots
@@ -107,6 +122,15 @@ impl ViewState {
             stripes: scene.stripes.clone(),
             initial: scene.clone(),
             scene,
+            limits: None,
+        }
+    }
+
+    /// The state with every edit checked against `limits` too.
+    pub fn with_limits(self, limits: ViewLimits) -> Self {
+        ViewState {
+            limits: Some(limits),
+            ..self
         }
     }
 
@@ -188,6 +212,13 @@ impl ViewState {
             self.scene = before;
             // "view: fur.number_of_shells = 0 is outside 1..=256" → the key and the range.
             return Some(e.message);
+        }
+        if let Some(l) = &self.limits
+            && let Err(e) =
+                pelage::limits::check(&self.scene, l.mesh, &l.work, l.max_memory, l.max_work)
+        {
+            self.scene = before;
+            return Some(format!("refused: {e}"));
         }
         note
     }
@@ -300,6 +331,35 @@ mod tests {
         }
         assert_eq!(s.scene.fur.texture_resolution, 4);
         assert!(!same_bake(&s.scene, &s.initial));
+    }
+
+    #[test]
+    fn edits_past_the_memory_limit_are_refused_and_undone() {
+        let scene = Scene::embedded_default().expect("default");
+        let mesh = pelage::limits::mesh_size(&scene).expect("procedural");
+        let work = pelage::limits::Workload::default();
+        let start = pelage::limits::estimate_memory(&scene, mesh, &work).total();
+        let mut s = ViewState::new(scene, true).with_limits(ViewLimits {
+            mesh,
+            work,
+            max_memory: 2 * start,
+            max_work: u64::MAX,
+        });
+        let resolution = s.scene.fur.texture_resolution;
+        // Doubling the texture resolution four times is 256 times the shell textures.
+        let mut refused = None;
+        for _ in 0..4 {
+            refused = refused.or(s.apply(Action::TextureResolution(1), 480.0));
+        }
+        let message = refused.expect("an edit past the limit is refused");
+        assert!(message.contains("needs about"), "{message}");
+        assert!(message.contains("more than the limit"), "{message}");
+        let kept = s.scene.fur.texture_resolution;
+        assert!(kept >= resolution && kept < 16 * resolution, "{kept}");
+        assert!(
+            pelage::limits::estimate_memory(&s.scene, mesh, &work).total() <= 2 * start,
+            "the refused edit was undone"
+        );
     }
 
     #[test]
