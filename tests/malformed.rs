@@ -356,3 +356,34 @@ fn a_render_runs_within_twice_its_memory_estimate_of_address_space() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The limits refuse what is absurd, never a shipped scene: every scene in `scenes/` fits the
+/// default budgets (memory, bake work, drawing work) with room to spare.
+#[test]
+fn every_shipped_scene_fits_the_default_budgets_with_room_to_spare() {
+    use pelage::limits;
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(&scenes)
+        .expect("scenes")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    paths.sort();
+    assert!(paths.len() >= 10, "{} scenes", paths.len());
+    let work = limits::Workload {
+        threads: 2,
+        ..limits::Workload::default()
+    };
+    let spare = limits::Budgets {
+        memory: limits::DEFAULT_MAX_MEMORY / 4,
+        bake_work: limits::DEFAULT_MAX_BAKE_WORK / 4,
+        draw_work: limits::DEFAULT_MAX_DRAW_WORK / 10,
+    };
+    for path in &paths {
+        let scene = pelage::scene::Scene::load(path).expect("shipped scenes load");
+        let mesh = limits::mesh_size(&scene).expect("mesh size");
+        if let Err(e) = limits::check(&scene, mesh, &work, &spare) {
+            panic!("{}: {e}", path.display());
+        }
+    }
+}

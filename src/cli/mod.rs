@@ -44,6 +44,10 @@ pub struct CommonArgs {
     /// tests (default 2e10, about a minute of baking on one core).
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_work)]
     pub max_work: Option<u64>,
+    /// Refuse scenes whose frame would take more than this many fragment evaluations (one per
+    /// spot, stripe and burn match) and triangle set-ups (default 1e11, minutes a frame).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_work)]
+    pub max_draw_work: Option<u64>,
 }
 
 impl CommonArgs {
@@ -58,6 +62,7 @@ impl CommonArgs {
             time: None,
             max_memory: None,
             max_work: None,
+            max_draw_work: None,
         }
     }
 }
@@ -247,9 +252,19 @@ pub fn check_workload(
         None => u32::try_from(rayon::current_num_threads()).unwrap_or(u32::MAX),
     };
     let work = limits::Workload { threads, ..work };
-    let max_work = args.max_work.unwrap_or(limits::DEFAULT_MAX_BAKE_WORK);
-    limits::check(scene, mesh, &work, max_memory(args.max_memory), max_work)
+    limits::check(scene, mesh, &work, &budgets(args))
         .map_err(|e| limit_failure(&scene_name(args), e))
+}
+
+/// The limits `args` set (`--max-memory`, `--max-work`, `--max-draw-work`), defaults for the
+/// others.
+pub fn budgets(args: &CommonArgs) -> pelage::limits::Budgets {
+    let d = pelage::limits::Budgets::default();
+    pelage::limits::Budgets {
+        memory: args.max_memory.unwrap_or(d.memory),
+        bake_work: args.max_work.unwrap_or(d.bake_work),
+        draw_work: args.max_draw_work.unwrap_or(d.draw_work),
+    }
 }
 
 /// `--max-memory`, or the default limit.
@@ -260,10 +275,7 @@ pub fn max_memory(flag: Option<u64>) -> u64 {
 /// A refusal by a limit, for `name` (the scene or the files at fault), naming the flag that
 /// raises it.
 pub fn limit_failure(name: &str, e: pelage::limits::LimitError) -> Failure {
-    let flag = match e {
-        pelage::limits::LimitError::Memory { .. } => "--max-memory",
-        pelage::limits::LimitError::BakeWork { .. } => "--max-work",
-    };
+    let flag = e.flag();
     Failure::bad_input(format!("{name}: {e}; raise the limit with {flag}"))
 }
 

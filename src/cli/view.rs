@@ -50,20 +50,10 @@ pub fn run(args: ViewArgs) -> Result<(), Failure> {
             threads: threads.saturating_mul(2),
             ..view_workload()
         },
-        max_memory: super::max_memory(args.common.max_memory),
-        max_work: args
-            .common
-            .max_work
-            .unwrap_or(pelage::limits::DEFAULT_MAX_BAKE_WORK),
+        budgets: super::budgets(&args.common),
     };
-    pelage::limits::check(
-        &scene,
-        limits.mesh,
-        &limits.work,
-        limits.max_memory,
-        limits.max_work,
-    )
-    .map_err(|e| super::limit_failure(&super::scene_name(&args.common), e))?;
+    pelage::limits::check(&scene, limits.mesh, &limits.work, &limits.budgets)
+        .map_err(|e| super::limit_failure(&super::scene_name(&args.common), e))?;
     if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 1000.0) {
         return Err(Failure::bad_input(format!(
             "--fps {} must be in (0, 1000]",

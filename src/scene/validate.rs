@@ -17,6 +17,9 @@ pub struct Limits {
     pub max_strands: u32,
     /// Procedural mesh triangles.
     pub max_model_resolution: u32,
+    /// Spots, stripes, burn matches: each list at most this long (each entry is evaluated per
+    /// fragment; `crate::limits::draw_work` bounds their cost with the image and the shells).
+    pub max_effects: usize,
 }
 
 impl Default for Limits {
@@ -27,6 +30,7 @@ impl Default for Limits {
             max_texture_resolution: 2048,
             max_strands: 1_000_000,
             max_model_resolution: 4_000_000,
+            max_effects: 1024,
         }
     }
 }
@@ -289,6 +293,23 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     }
 
     range_f32("time", scene.time, -super::MAX_TIME, super::MAX_TIME)?;
+    let matches = scene.burn.as_ref().map_or(0, |b| b.matches.len());
+    for (key, count) in [
+        ("spots", scene.spots.len()),
+        ("stripes", scene.stripes.len()),
+        ("burn.matches", matches),
+    ] {
+        if count > limits.max_effects {
+            return Err((
+                key.into(),
+                format!(
+                    "{key} lists {count} entries, more than the limit of {} (each is evaluated \
+                     for every fragment)",
+                    limits.max_effects
+                ),
+            ));
+        }
+    }
     for (k, spot) in scene.spots.iter().enumerate() {
         let key = |name: &str| format!("spots[{k}].{name}");
         colour(&key("colour"), spot.colour)?;

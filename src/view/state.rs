@@ -67,10 +67,8 @@ pub struct ViewLimits {
     pub mesh: pelage::limits::MeshSize,
     /// Threads and frames held.
     pub work: pelage::limits::Workload,
-    /// Memory limit, bytes.
-    pub max_memory: u64,
-    /// Bake-work limit.
-    pub max_work: u64,
+    /// Memory and work limits.
+    pub budgets: pelage::limits::Budgets,
 }
 
 /// Spots for scenes that have none, so `s` always shows something: two light-based spots
@@ -214,8 +212,7 @@ impl ViewState {
             return Some(e.message);
         }
         if let Some(l) = &self.limits
-            && let Err(e) =
-                pelage::limits::check(&self.scene, l.mesh, &l.work, l.max_memory, l.max_work)
+            && let Err(e) = pelage::limits::check(&self.scene, l.mesh, &l.work, &l.budgets)
         {
             self.scene = before;
             return Some(format!("refused: {e}"));
@@ -342,8 +339,11 @@ mod tests {
         let mut s = ViewState::new(scene, true).with_limits(ViewLimits {
             mesh,
             work,
-            max_memory: 2 * start,
-            max_work: u64::MAX,
+            budgets: pelage::limits::Budgets {
+                memory: 2 * start,
+                bake_work: u64::MAX,
+                draw_work: u64::MAX,
+            },
         });
         let resolution = s.scene.fur.texture_resolution;
         // Doubling the texture resolution four times is 256 times the shell textures.
