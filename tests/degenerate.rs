@@ -75,8 +75,9 @@ fn zero_area_faces_and_repeated_vertices() {
 
 #[test]
 fn huge_coordinates() {
-    // A whole tetrahedron at 1e30, seen from far away, and one vertex at 1e30 among small ones.
-    let far = "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    // A whole tetrahedron at 1e18 (the largest coordinates accepted), seen from far away, and
+    // one vertex at 1e18 among small ones.
+    let far = "v 0 0 0\nv 1e18 0 0\nv 0 1e18 0\nv 0 0 1e18\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
     render_obj("huge", far, [6e18, 4e18, 8e18], "");
     // Farther, the view vector's length overflows f32: refused, never a background-only image.
     let text = scene(
@@ -86,7 +87,7 @@ fn huge_coordinates() {
     );
     let err = Scene::parse(&text, "too-far", &dir()).unwrap_err();
     assert!(err.to_string().contains("camera.eye"), "{err}");
-    let spike = format!("{QUAD}v 0 1e30 0\nvt 0.5 0.5\nf 1/1 2/2 5/5\nf 2/2 3/3 5/5\n");
+    let spike = format!("{QUAD}v 0 1e18 0\nvt 0.5 0.5\nf 1/1 2/2 5/5\nf 2/2 3/3 5/5\n");
     render_obj("spike", &spike, EYE, "[wind]\nstrength = 0.8\n");
     let tiny = "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nf 1 2 3\n";
     render_obj("tiny", tiny, EYE, "");
@@ -151,11 +152,48 @@ fn non_finite_coordinates_are_refused_naming_the_line() {
             other => panic!("{name}: {other:?}"),
         }
     }
+    // Finite, but products of coordinates (normals, areas) would overflow f32.
+    for (name, obj, line) in [
+        ("products", "v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n", 2),
+        ("negative", "v 0 0 0\nv 1 0 0\nv 0 0 -2e18\nf 1 2 3\n", 3),
+    ] {
+        let path = dir().join(format!("{name}.obj"));
+        std::fs::write(&path, obj).expect("write obj");
+        match load_obj(&path) {
+            Err(MeshError::Syntax {
+                line: l, message, ..
+            }) => {
+                assert_eq!(l, line, "{name}");
+                assert!(message.contains("would overflow f32"), "{name}: {message}");
+            }
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn meshes_without_a_face_of_non_zero_area_are_refused_naming_the_first_face() {
+    // Points, a line, and a face repeating one vertex: nothing to grow fur on.
+    let obj = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\n# faces\nf 1 2 3\nf 4 4 4\nf 1 1 2\n";
+    let path = dir().join("no-area.obj");
+    std::fs::write(&path, obj).expect("write obj");
+    match load_obj(&path) {
+        Err(MeshError::Syntax { line, message, .. }) => {
+            assert_eq!(line, 6);
+            assert!(message.contains("none of the 3 faces"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // One real face among them is enough; so is a tiny one (its area is 5e-61, in f64).
+    let one = format!("{obj}f 1 2 4\n");
+    assert!(pelage::mesh::load_obj_bytes(one.as_bytes(), Path::new("one.obj")).is_ok());
+    let tiny = "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nf 1 2 3\n";
+    assert!(pelage::mesh::load_obj_bytes(tiny.as_bytes(), Path::new("tiny.obj")).is_ok());
 }
 
 #[test]
 fn same_degenerate_scene_same_bytes() {
-    let obj = format!("{QUAD}v 0 1e30 0\nvt 0.5 0.5\nf 1/1 2/2 5/5\n");
+    let obj = format!("{QUAD}v 0 1e18 0\nvt 0.5 0.5\nf 1/1 2/2 5/5\n");
     let a = render_obj("again-a", &obj, EYE, "");
     let b = render_obj("again-b", &obj, EYE, "");
     assert_eq!(a, b);

@@ -55,7 +55,7 @@ pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
     load_checked(
         path,
         &mut BufReader::new(file.take(crate::limits::MAX_OBJ_BYTES)),
-        summary.warnings,
+        summary,
     )
 }
 
@@ -64,14 +64,14 @@ pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
 /// target and of the property tests.
 pub fn load_obj_bytes(bytes: &[u8], name: &Path) -> Result<LoadedMesh, MeshError> {
     let summary = scan_obj_reader(name, bytes, None)?;
-    load_checked(name, &mut &bytes[..], summary.warnings)
+    load_checked(name, &mut &bytes[..], summary)
 }
 
 /// tobj over text that [`scan_obj_reader`] accepted, then the merge into one [`Mesh`].
 fn load_checked(
     path: &Path,
     reader: &mut impl std::io::BufRead,
-    warnings: Vec<String>,
+    summary: ObjSummary,
 ) -> Result<LoadedMesh, MeshError> {
     let options = tobj::LoadOptions {
         single_index: true,
@@ -92,7 +92,7 @@ fn load_checked(
                 source,
             },
         })?;
-    let mut warnings = warnings;
+    let mut warnings = summary.warnings;
 
     let mut positions: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
@@ -133,6 +133,23 @@ fn load_checked(
     }
     if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
         return Err(non_finite(path, vertex, *p));
+    }
+    // A surface to grow fur on: at least one face of non-zero area (in f64, so that a tiny
+    // but real triangle of 1e-30 counts).
+    let has_area = indices.iter().any(|t| {
+        let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+        (b - a).cross(c - a).length_squared() > 0.0
+    });
+    if !has_area {
+        return Err(MeshError::Syntax {
+            path: path.to_path_buf(),
+            line: summary.first_face_line,
+            message: format!(
+                "none of the {} faces (from this line on) has a non-zero area: they are all \
+                 points or lines, so there is no surface to grow fur on",
+                indices.len()
+            ),
+        });
     }
     if !has_uv {
         warnings.push(format!(
@@ -194,7 +211,14 @@ pub struct ObjSummary {
     pub triangles: u64,
     /// Non-fatal problems (a material library that is missing).
     pub warnings: Vec<String>,
+    /// The line of the first `f` statement (0 when there is none).
+    pub first_face_line: usize,
 }
+
+/// Largest coordinate magnitude accepted in an OBJ file. Normals, areas and tangent frames
+/// multiply coordinate differences: at most `2·10¹⁸` apart, a product is at most `4·10³⁶`, and
+/// a sum of three stays below `f32::MAX ≈ 3.4·10³⁸`, where `1e30` would overflow to infinity.
+pub const MAX_COORDINATE: f32 = 1.0e18;
 
 /// The statements of the OBJ specification that pelage does not use: accepted and ignored (any
 /// other first word on a line is an error, so a file that is not an OBJ is not read as an empty
@@ -399,6 +423,13 @@ pub fn scan_obj_reader(
                         value: p,
                     }));
                 }
+                if let Some(c) = p.iter().find(|c| c.abs() > MAX_COORDINATE) {
+                    return Err(format!(
+                        "`v`: coordinate {c:e} is beyond ±{MAX_COORDINATE:e}: normals and areas \
+                         multiply coordinates, and would overflow f32; scale the mesh down"
+                    )
+                    .into());
+                }
                 let rest: Vec<&str> = words.collect();
                 match rest.len() {
                     0 => {}
@@ -470,6 +501,9 @@ pub fn scan_obj_reader(
                 // tobj turns a polyline of 3 or more vertices into a polygon too.
                 if corners < 3 && statement == "f" {
                     return Err(format!("`f` needs at least 3 vertices, found {corners}").into());
+                }
+                if corners >= 3 && s.first_face_line == 0 {
+                    s.first_face_line = line;
                 }
                 s.triangles += corners.saturating_sub(2);
             }
