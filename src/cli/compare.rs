@@ -16,9 +16,10 @@ pub struct CompareArgs {
     /// Print the metrics as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-    /// `exact` (default) or comma-separated bounds: threshold=N (per channel, 0–255),
-    /// over=F (fraction of pixels over the threshold), neighbour-over=F, flip-mean=F,
-    /// flip-pNN=F (e.g. flip-p99=0.3), psnr=DB.
+    /// A preset, `exact` (default: every pixel equal) or `gpu` (the README's measured GPU
+    /// tier), and/or comma-separated bounds, read left to right: threshold=N (per channel,
+    /// 0–255), over=F (fraction of pixels over the threshold), neighbour-over=F, flip-mean=F,
+    /// flip-pNN=F (e.g. flip-p99=0.3), psnr=DB. Only the criteria named are checked.
     #[arg(long, default_value = "exact")]
     pub tolerance: String,
     /// Write a heat map of the differences (log scale of the largest channel difference) here.
