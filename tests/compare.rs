@@ -58,9 +58,14 @@ fn an_image_against_itself_is_exact() {
     assert_eq!(json["max_abs_error"], serde_json::json!([0, 0, 0, 0]));
     assert_eq!(json["flip"]["mean"], 0.0);
     assert_eq!(json["failures"], serde_json::json!([]));
-    // Nothing differs: the heat map holds only the dimmed reference (grey).
+    // Nothing differs: the heat map holds only the dimmed reference (grey); its legend strip
+    // below (the colour scale) is in colour.
     let map = image::open(&heat).expect("heat map").to_rgba8();
-    assert!(map.pixels().all(|p| p[0] == p[1] && p[1] == p[2]));
+    let legend = pelage::compare::legend::LEGEND_HEIGHT;
+    assert_eq!(map.height(), 90 + legend);
+    let region = image::imageops::crop_imm(&map, 0, 0, 120, 90).to_image();
+    assert!(region.pixels().all(|p| p[0] == p[1] && p[1] == p[2]));
+    assert!(map.pixels().any(|p| p[0] != p[2]), "the legend's colours");
 }
 
 #[test]
@@ -93,7 +98,10 @@ fn two_different_renders_fail_and_the_heat_map_shows_where() {
         image::open(&b).expect("b").to_rgba8(),
     );
     let map = image::open(&heat).expect("heat map").to_rgba8();
-    for (x, y, p) in map.enumerate_pixels() {
+    for (x, y, p) in image::imageops::crop_imm(&map, 0, 0, 120, 90)
+        .to_image()
+        .enumerate_pixels()
+    {
         let grey = p[0] == p[1] && p[1] == p[2];
         assert_eq!(
             grey,

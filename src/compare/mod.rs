@@ -20,6 +20,9 @@
 //! lists every bound exceeded, and an empty list is a pass. [`heat_map`] draws where and how
 //! much two images differ.
 
+pub mod legend;
+pub mod report;
+
 use image::RgbaImage;
 use serde::{Serialize, Serializer};
 use std::fmt;
