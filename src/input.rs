@@ -103,10 +103,27 @@ pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputErro
         .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
     crate::raster::framebuffer::check_size(width, height)
         .map_err(|e| error(path, format!("the {what} is {width}×{height}: {e}")))?;
-    Ok(reader()?
+    let decoded = reader()?
         .decode()
-        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?
-        .into_rgba8())
+        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    Ok(to_rgba8(decoded))
+}
+
+/// An image of any depth as RGBA8: float images (OpenEXR) are rounded by the framebuffer's own
+/// rule ([`crate::raster::framebuffer::quantise_unorm8`]: NaN → 0), so that `pelage render`'s
+/// `.exr` reads back as the bytes of its `.png`; 16-bit and 8-bit ones by the `image` crate
+/// (`round(v·255 / 65535)`).
+pub fn to_rgba8(image: image::DynamicImage) -> image::RgbaImage {
+    use crate::raster::framebuffer::quantise_unorm8;
+    match image {
+        image::DynamicImage::ImageRgba32F(_) | image::DynamicImage::ImageRgb32F(_) => {
+            let float = image.into_rgba32f();
+            let (w, h) = float.dimensions();
+            let bytes = float.as_raw().iter().map(|&c| quantise_unorm8(c)).collect();
+            image::RgbaImage::from_raw(w, h, bytes).expect("same size")
+        }
+        other => other.into_rgba8(),
+    }
 }
 
 /// The width and height of an image file, read from its header without decoding it, and the

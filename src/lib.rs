@@ -13,6 +13,7 @@
 pub mod camera;
 pub mod compare;
 pub mod export;
+pub mod font;
 pub mod fur;
 #[cfg(feature = "gpu")]
 pub mod gpu;

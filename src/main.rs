@@ -50,6 +50,11 @@ enum Command {
     /// Draw the thesis's strand figures 3.2–3.7 (strand, cones, thickness, slope, shells,
     /// inner and outer part) from the real fur code.
     Diagram(DiagramArgs),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) on standard output.
+    Completions {
+        /// The shell to complete for.
+        shell: clap_complete::Shell,
+    },
 }
 
 /// Exit status of an internal error (a panic: a bug in pelage, never bad input).
@@ -85,6 +90,7 @@ fn main() -> ExitCode {
     let command = cli.command.unwrap_or(Command::Render(RenderArgs {
         common: CommonArgs::defaults(),
         output: PathBuf::from("pelage.png"),
+        depth: 8,
         frames: None,
         fps: 10.0,
         animation: None,
@@ -99,6 +105,7 @@ fn main() -> ExitCode {
         Command::Export(args) => cli::export::run(args),
         Command::View(args) => cli::view::run(args),
         Command::Diagram(args) => cli::diagram::run(args),
+        Command::Completions { shell } => completions(shell),
     }));
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
@@ -108,6 +115,15 @@ fn main() -> ExitCode {
         }
         Err(_) => ExitCode::from(EXIT_BUG),
     }
+}
+
+/// The completion script for `shell`, on standard output (a closed pipe is not an error).
+fn completions(shell: clap_complete::Shell) -> Result<(), cli::Failure> {
+    use clap::CommandFactory;
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "pelage", &mut script);
+    pelage::output::write_atomic(std::path::Path::new("-"), &script)
+        .map_err(|e| cli::Failure::other(e.to_string()))
 }
 
 /// Help and version go to stdout as clap prints them; a bad argument is one line on stderr

@@ -129,6 +129,114 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
     write_atomic(path, &bytes)
 }
 
+/// The image files `pelage render -o` writes, chosen by the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit RGBA PNG (`.png`, no extension, or `-` for standard output): the reference bytes.
+    Png8,
+    /// 16-bit RGBA PNG (`.png` with `--depth 16`): the float values rounded to 16 bits.
+    Png16,
+    /// OpenEXR (`.exr`), 32-bit float RGBA: the framebuffer's values before any rounding.
+    Exr,
+}
+
+impl ImageFormat {
+    /// The format for `path` at `depth` bits per PNG channel (8 or 16): `.png` (any case),
+    /// no extension and `-` are PNG, `.exr` is OpenEXR; any other extension is refused, naming
+    /// it, as is `depth` 16 for anything but PNG.
+    pub fn for_path(path: &Path, depth: u8) -> Result<Self, String> {
+        let extension = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        let format = match extension.as_deref() {
+            None | Some("png") => {
+                if depth == 16 {
+                    ImageFormat::Png16
+                } else {
+                    ImageFormat::Png8
+                }
+            }
+            Some("exr") => ImageFormat::Exr,
+            Some(other) => {
+                return Err(format!(
+                    "{}: pelage cannot write .{other} files; it writes .png (8-bit, or 16-bit \
+                     with --depth 16) and .exr (32-bit float)",
+                    path.display()
+                ));
+            }
+        };
+        if depth == 16 && format == ImageFormat::Exr {
+            return Err(format!(
+                "{}: --depth 16 is for PNG; an .exr file holds 32-bit floats",
+                path.display()
+            ));
+        }
+        if depth != 8 && depth != 16 {
+            return Err(format!("--depth {depth}: 8 or 16 bits per channel"));
+        }
+        Ok(format)
+    }
+}
+
+/// `⌊65535·clamp(c, 0, 1) + 0.5⌋`, NaN → 0: the 16-bit twin of the framebuffer's 8-bit rounding
+/// (`quantise_unorm8`).
+#[inline]
+pub fn quantise_unorm16(c: f32) -> u16 {
+    if c.is_nan() {
+        return 0;
+    }
+    (c.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
+}
+
+/// Encodes row-major float RGBA (4 values a pixel) as a 16-bit RGBA PNG.
+pub fn encode_png16(width: u32, height: u32, rgba: &[f32]) -> Result<Vec<u8>, String> {
+    let samples: Vec<u16> = rgba.iter().map(|&c| quantise_unorm16(c)).collect();
+    let mut bytes = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut bytes);
+    image::ImageEncoder::write_image(
+        encoder,
+        bytemuck::cast_slice(&samples),
+        width,
+        height,
+        image::ExtendedColorType::Rgba16,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+/// Encodes row-major float RGBA (4 values a pixel) as OpenEXR, 32-bit float, unchanged.
+pub fn encode_exr(width: u32, height: u32, rgba: &[f32]) -> Result<Vec<u8>, String> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    let encoder = image::codecs::openexr::OpenExrEncoder::new(&mut bytes);
+    image::ImageEncoder::write_image(
+        encoder,
+        bytemuck::cast_slice(rgba),
+        width,
+        height,
+        image::ExtendedColorType::Rgba32F,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
+}
+
+/// Writes float RGBA as a 16-bit PNG or an OpenEXR file (`format`), atomically. For
+/// [`ImageFormat::Png8`] the caller writes the 8-bit bytes with [`write_png`].
+pub fn write_float_image(
+    path: &Path,
+    format: ImageFormat,
+    width: u32,
+    height: u32,
+    rgba: &[f32],
+) -> Result<(), OutputError> {
+    let bytes = match format {
+        ImageFormat::Png16 => encode_png16(width, height, rgba),
+        ImageFormat::Exr => encode_exr(width, height, rgba),
+        ImageFormat::Png8 => Err("8-bit PNG is written from the 8-bit image".to_string()),
+    }
+    .map_err(|e| error(path, e))?;
+    write_atomic(path, &bytes)
+}
+
 /// Writes frames (width, height, RGBA8) as a looping animated GIF at `fps`, atomically. GIF
 /// delays are whole hundredths of a second: `round(100 / fps)`, at least 1. Colours are reduced
 /// to a 256-colour palette per frame by the `gif` crate's deterministic quantiser.
@@ -172,5 +280,53 @@ mod tests {
         assert_eq!(leftovers.len(), 1);
         assert!(write_png(&dir.join("missing/b.png"), 3, 2, &pixels).is_err());
         std::fs::remove_dir_all(&dir).expect("cleanup");
+    }
+
+    #[test]
+    fn formats_follow_the_extension_and_unknown_ones_are_named() {
+        let f = |p: &str, d| ImageFormat::for_path(Path::new(p), d);
+        assert_eq!(f("a.png", 8), Ok(ImageFormat::Png8));
+        assert_eq!(f("a.PNG", 16), Ok(ImageFormat::Png16));
+        assert_eq!(f("-", 8), Ok(ImageFormat::Png8));
+        assert_eq!(f("a", 8), Ok(ImageFormat::Png8));
+        assert_eq!(f("a.exr", 8), Ok(ImageFormat::Exr));
+        let jpg = f("out.jpg", 8).unwrap_err();
+        assert!(
+            jpg.contains("out.jpg") && jpg.contains(".jpg files"),
+            "{jpg}"
+        );
+        assert!(f("a.exr", 16).unwrap_err().contains("--depth 16"));
+        assert!(f("a.png", 12).is_err());
+    }
+
+    #[test]
+    fn sixteen_bit_rounding_matches_f64() {
+        for i in 0..=4096 {
+            let c = i as f32 / 4096.0 * 1.2 - 0.1;
+            // In f64, unless 65535·c lies within f32's rounding of a half step (where the
+            // f32 product and sum may round up: the same rule as the 8-bit rounding).
+            let scaled = f64::from(c).clamp(0.0, 1.0) * 65535.0;
+            let expected = (scaled + 0.5).floor();
+            let got = f64::from(quantise_unorm16(c));
+            if (scaled.fract() - 0.5).abs() > 1e-2 {
+                assert_eq!(got, expected, "{c}");
+            } else {
+                assert!((got - expected).abs() <= 1.0, "{c}");
+            }
+        }
+        assert_eq!(quantise_unorm16(f32::NAN), 0);
+        assert_eq!(quantise_unorm16(f32::INFINITY), 65535);
+    }
+
+    #[test]
+    fn sixteen_bit_png_and_exr_round_trip() {
+        let rgba: Vec<f32> = (0..4 * 3 * 2).map(|i| i as f32 / 23.0).collect();
+        let png = encode_png16(3, 2, &rgba).expect("png16");
+        let back = image::load_from_memory(&png).expect("read").to_rgba16();
+        let expected: Vec<u16> = rgba.iter().map(|&c| quantise_unorm16(c)).collect();
+        assert_eq!(back.as_raw(), &expected);
+        let exr = encode_exr(3, 2, &rgba).expect("exr");
+        let back = image::load_from_memory(&exr).expect("read").to_rgba32f();
+        assert_eq!(back.as_raw(), &rgba);
     }
 }

@@ -58,9 +58,14 @@ fn an_image_against_itself_is_exact() {
     assert_eq!(json["max_abs_error"], serde_json::json!([0, 0, 0, 0]));
     assert_eq!(json["flip"]["mean"], 0.0);
     assert_eq!(json["failures"], serde_json::json!([]));
-    // Nothing differs: the heat map holds only the dimmed reference (grey).
+    // Nothing differs: the heat map holds only the dimmed reference (grey); its legend strip
+    // below (the colour scale) is in colour.
     let map = image::open(&heat).expect("heat map").to_rgba8();
-    assert!(map.pixels().all(|p| p[0] == p[1] && p[1] == p[2]));
+    let legend = pelage::compare::legend::LEGEND_HEIGHT;
+    assert_eq!(map.height(), 90 + legend);
+    let region = image::imageops::crop_imm(&map, 0, 0, 120, 90).to_image();
+    assert!(region.pixels().all(|p| p[0] == p[1] && p[1] == p[2]));
+    assert!(map.pixels().any(|p| p[0] != p[2]), "the legend's colours");
 }
 
 #[test]
@@ -93,7 +98,10 @@ fn two_different_renders_fail_and_the_heat_map_shows_where() {
         image::open(&b).expect("b").to_rgba8(),
     );
     let map = image::open(&heat).expect("heat map").to_rgba8();
-    for (x, y, p) in map.enumerate_pixels() {
+    for (x, y, p) in image::imageops::crop_imm(&map, 0, 0, 120, 90)
+        .to_image()
+        .enumerate_pixels()
+    {
         let grey = p[0] == p[1] && p[1] == p[2];
         assert_eq!(
             grey,
@@ -144,4 +152,133 @@ fn images_that_cannot_be_compared_exit_2_naming_the_file() {
     let err = text(&o).1;
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("over=7") && !err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn a_partial_tolerance_checks_only_what_it_names_and_says_so() {
+    let dir = scratch("partial");
+    let a = render_wind(&dir, "0.3");
+    let b = render_wind(&dir, "0.9");
+    // The renders differ (exact fails), but a FLIP-mean bound of 1 cannot.
+    let o = pelage(&["compare", path(&a), path(&b), "--tolerance", "flip-mean=1"]);
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}{err}");
+    assert!(out.contains("checked         FLIP mean ≤ 1\n"), "{out}");
+    assert!(
+        out.contains("within tolerance (1 criteria checked)"),
+        "{out}"
+    );
+    let o = pelage(&["compare", path(&a), path(&b), "--tolerance", "exact"]);
+    let (out, _) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(out.contains("checked         every pixel equal"), "{out}");
+    let o = pelage(&[
+        "compare",
+        path(&a),
+        path(&b),
+        "--tolerance",
+        "gpu",
+        "--json",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(json["checked"].as_array().map(Vec::len), Some(4), "{json}");
+}
+
+/// The figures of one row of the README's GPU tolerance table, as a comparison judged by `t`.
+fn judged_row(row: &str, t: &pelage::compare::Tolerance) -> Vec<String> {
+    let cells: Vec<&str> = row.trim_matches('|').split('|').map(str::trim).collect();
+    assert_eq!(cells.len(), 7, "{row}");
+    let number = |cell: &str| -> f64 {
+        cell.trim_matches('*')
+            .trim_end_matches(" dB")
+            .trim_end_matches('%')
+            .parse()
+            .unwrap_or_else(|_| panic!("{cell} in {row}"))
+    };
+    let pixels = 1_000_000u64;
+    let fraction = |cell: &str| ((number(cell) / 100.0) * pixels as f64).round() as u64;
+    let max: Vec<u8> = cells[2]
+        .split('/')
+        .map(|v| v.parse().expect("max error"))
+        .collect();
+    let over = fraction(cells[4]);
+    let c = pelage::compare::Comparison {
+        width: 1000,
+        height: 1000,
+        pixels,
+        exact_pixels: fraction(cells[1]),
+        max_abs_error: [max[0], max[1], max[2], 0],
+        mean_abs_error: [0.0; 4],
+        psnr: pelage::compare::Psnr(number(cells[3])),
+        over_threshold: over,
+        neighbour_over_threshold: over,
+        flip: pelage::compare::FlipStats {
+            mean: number(cells[5]) as f32,
+            median: 0.0,
+            p95: 0.0,
+            p99: number(cells[6]) as f32,
+            max: 1.0,
+            checked_percentile: t
+                .max_flip_percentile
+                .map(|(p, _)| (p, number(cells[6]) as f32)),
+        },
+        tolerance: t.clone(),
+        checked: t.criteria(),
+        failures: Vec::new(),
+    };
+    pelage::compare::judge(&c, t)
+}
+
+#[test]
+fn the_readmes_first_compare_example_catches_every_measured_mutant() {
+    // The README's first `pelage compare` command must pass every honest GPU scene of its
+    // tolerance table and fail every perturbed shader (rows in italics: Banks 4.6 and the rest).
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).expect("README");
+    let example = readme
+        .lines()
+        .find(|l| l.trim_start().starts_with("pelage compare "))
+        .expect("a compare example");
+    let words: Vec<&str> = example.split_whitespace().collect();
+    let at = words
+        .iter()
+        .position(|w| *w == "--tolerance")
+        .expect("the example names its tolerance");
+    let t = pelage::compare::Tolerance::parse(words[at + 1]).expect("tolerance parses");
+    // The table counts pixels more than 8 steps off: a tolerance on the pixel count must use it.
+    assert!(
+        t.max_over_fraction.is_none() || t.channel_threshold == 8,
+        "{t}"
+    );
+    let table: Vec<&str> = readme
+        .lines()
+        .skip_while(|l| !l.starts_with("| scene | exact pixels"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .collect();
+    let mutants: Vec<&str> = table
+        .iter()
+        .copied()
+        .filter(|r| r.starts_with("| *"))
+        .collect();
+    assert!(
+        mutants.len() >= 5 && table.len() > mutants.len() + 20,
+        "{table:?}"
+    );
+    assert!(mutants.iter().any(|r| r.contains("Banks 4.6")));
+    for row in &table {
+        let failures = judged_row(row, &t);
+        if row.starts_with("| *") {
+            assert!(!failures.is_empty(), "{example}: passes the mutant {row}");
+        } else {
+            assert!(failures.is_empty(), "{example}: fails {row}: {failures:?}");
+        }
+    }
+    // The old example (`threshold=8,over=0.005`) lets Banks 4.6 through: this check can fail.
+    let old = pelage::compare::Tolerance::parse("threshold=8,over=0.005").expect("old");
+    let banks = mutants
+        .iter()
+        .find(|r| r.contains("Banks 4.6"))
+        .expect("row");
+    assert!(judged_row(banks, &old).is_empty());
 }

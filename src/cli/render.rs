@@ -10,6 +10,7 @@ use super::{
     with_threads, write_png,
 };
 use clap::Args;
+use pelage::output::ImageFormat;
 use pelage::render::PreparedScene;
 use pelage::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -18,9 +19,14 @@ use std::path::{Path, PathBuf};
 pub struct RenderArgs {
     #[command(flatten)]
     pub common: CommonArgs,
-    /// Output PNG; with --frames, the folder the numbered frames go to.
+    /// Output image: .png (8-bit; 16-bit with --depth 16) or .exr (32-bit float, the values
+    /// before 8-bit rounding); with --frames, the folder the numbered PNG frames go to.
     #[arg(short, long, default_value = "pelage.png")]
     pub output: PathBuf,
+    /// Bits per channel of a PNG output: 8 (the reference bytes) or 16 (the float values
+    /// rounded to 16 bits).
+    #[arg(long, default_value_t = 8, allow_negative_numbers = true)]
+    pub depth: u8,
     /// Render an animation of N frames: frame k is the instant k / fps, written as
     /// OUTPUT/frame_0000.png, frame_0001.png, ...
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=i64::from(pelage::limits::MAX_FRAMES)))]
@@ -48,7 +54,25 @@ pub enum Backend {
 pub fn run(args: RenderArgs) -> Result<(), Failure> {
     let scene = load_scene(&args.common)?;
     let tile = args.common.tile;
+    if args.frames.is_some() && args.depth != 8 {
+        return Err(Failure::bad_input(
+            "--depth 16: animation frames are 8-bit PNGs; render single instants (--time) for \
+             16-bit PNG or EXR",
+        ));
+    }
+    let format = if args.frames.is_some() {
+        ImageFormat::Png8
+    } else {
+        ImageFormat::for_path(&args.output, args.depth)
+            .map_err(|e| Failure::bad_input(format!("-o {e}")))?
+    };
     if args.backend == Backend::Gpu {
+        if format != ImageFormat::Png8 {
+            return Err(Failure::bad_input(format!(
+                "-o {}: the GPU backend writes 8-bit PNG",
+                args.output.display()
+            )));
+        }
         return super::gpu_render::run(&scene, &args);
     }
     if let Some(frames) = args.frames {
@@ -61,13 +85,23 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
         let bar = spinner("baking fur textures");
         let prepared = PreparedScene::new(&scene).map_err(|e| render_failure(e, &scene, &name))?;
         bar.set_message("rendering");
-        let image = prepared
-            .render(tile)
-            .map_err(|e| render_failure(e, &scene, &name));
+        let image = if format == ImageFormat::Png8 {
+            prepared.render(tile).map(|image| (image, Vec::new()))
+        } else {
+            prepared.render_linear_at(scene.time, tile)
+        }
+        .map_err(|e| render_failure(e, &scene, &name));
         bar.finish_and_clear();
         image
     })??;
-    write_png(&args.output, image.width, image.height, &image.rgba8)?;
+    let (image, linear) = image;
+    if format == ImageFormat::Png8 {
+        write_png(&args.output, image.width, image.height, &image.rgba8)?;
+    } else {
+        let floats: Vec<f32> = linear.iter().flat_map(|c| c.to_array()).collect();
+        pelage::output::write_float_image(&args.output, format, image.width, image.height, &floats)
+            .map_err(|e| Failure::other(e.to_string()))?;
+    }
     for warning in &image.warnings {
         eprintln!("warning: {warning}");
     }
@@ -84,7 +118,7 @@ fn check_output_file(path: &Path) -> Result<(), Failure> {
         &pelage::output::resolve_output(path).map_err(|e| Failure::bad_input(format!("-o {e}")))?;
     if path.is_dir() {
         return Err(Failure::bad_input(format!(
-            "-o {}: is a folder (a PNG file name is expected; use --frames for a folder)",
+            "-o {}: is a folder (an image file name is expected; use --frames for a folder)",
             path.display()
         )));
     }

@@ -20,6 +20,9 @@
 //! lists every bound exceeded, and an empty list is a pass. [`heat_map`] draws where and how
 //! much two images differ.
 
+pub mod legend;
+pub mod report;
+
 use image::RgbaImage;
 use serde::{Serialize, Serializer};
 use std::fmt;
@@ -48,16 +51,18 @@ pub enum CompareError {
 }
 
 /// The documented tolerance of a correct GPU implementation against the oracle (README,
-/// "Tolerances"): what `tests/gpu.rs` and `pelage sweep --backend gpu --against-oracle` judge by.
+/// "Tolerances"): what `tests/gpu.rs` and `pelage sweep --backend gpu --against-oracle` judge by,
+/// and what `--tolerance gpu` names.
 pub const GPU_TOLERANCE: &str = "threshold=8,over=0.005,flip-mean=0.015,flip-p99=0.15,psnr=40";
 
-/// The bounds a comparison must stay within. The default is exact equality.
+/// The bounds a comparison must stay within: each criterion is checked only when it is set
+/// (`Some`). The default is exact equality (threshold 0, no pixel over it).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Tolerance {
     /// A pixel is "over" when any channel differs by more than this (8-bit steps).
     pub channel_threshold: u8,
-    /// Largest allowed fraction of pixels over the threshold.
-    pub max_over_fraction: f64,
+    /// Largest allowed fraction of pixels over the threshold; `None`: not checked.
+    pub max_over_fraction: Option<f64>,
     /// Largest allowed fraction of pixels over the threshold with no match among the other
     /// image's 3×3 neighbours (edges and filtering forgiven); `None`: not checked.
     pub max_neighbour_over_fraction: Option<f64>,
@@ -75,12 +80,23 @@ impl Default for Tolerance {
     }
 }
 
+/// The keys a tolerance string may name, for messages.
+const KEYS: &str = "exact, gpu, threshold, over, neighbour-over, flip-mean, flip-pNN, psnr";
+
 impl Tolerance {
     /// Every pixel equal in every channel.
     pub fn exact() -> Self {
         Tolerance {
+            max_over_fraction: Some(0.0),
+            ..Tolerance::unconstrained()
+        }
+    }
+
+    /// Nothing checked (threshold 0 for the counts): the start of a partial tolerance.
+    pub fn unconstrained() -> Self {
+        Tolerance {
             channel_threshold: 0,
-            max_over_fraction: 0.0,
+            max_over_fraction: None,
             max_neighbour_over_fraction: None,
             max_flip_mean: None,
             max_flip_percentile: None,
@@ -88,21 +104,45 @@ impl Tolerance {
         }
     }
 
-    /// Reads a tolerance from `exact` or a comma-separated list of `key=value`, starting from
-    /// exact equality: `threshold=N` (0–255), `over=F` (fraction of pixels, 0–1),
-    /// `neighbour-over=F`, `flip-mean=F`, `flip-pP=F` (e.g. `flip-p99=0.3`: the 99th
-    /// percentile of the FLIP error at most 0.3), `psnr=DB`.
+    /// The documented tier of a correct GPU implementation, [`GPU_TOLERANCE`].
+    pub fn gpu() -> Self {
+        Tolerance::parse(GPU_TOLERANCE).expect("GPU_TOLERANCE parses")
+    }
+
+    /// Reads a tolerance: a comma-separated list of presets and `key=value` bounds, read left
+    /// to right (a later item overrides an earlier one). Presets: `exact` (every pixel equal)
+    /// and `gpu` ([`GPU_TOLERANCE`]). Bounds: `threshold=N` (0–255), `over=F` (fraction of
+    /// pixels over the threshold, 0–1), `neighbour-over=F`, `flip-mean=F`, `flip-pP=F` (e.g.
+    /// `flip-p99=0.3`: the 99th percentile of the FLIP error at most 0.3), `psnr=DB`. Only the
+    /// criteria named are checked: `flip-mean=0.015` alone checks the FLIP mean and nothing
+    /// else. `threshold=N` without `over` or `neighbour-over` allows no pixel over N. An empty
+    /// string is `exact`.
     pub fn parse(text: &str) -> Result<Self, CompareError> {
-        let mut t = Tolerance::exact();
         let text = text.trim();
-        if text.is_empty() || text == "exact" {
-            return Ok(t);
+        if text.is_empty() {
+            return Ok(Tolerance::exact());
         }
+        let mut t = Tolerance::unconstrained();
         let bad = |m: String| CompareError::Tolerance(m);
+        let (mut threshold_named, mut over_named) = (false, false);
         for item in text.split(',') {
-            let (key, value) = item
-                .split_once('=')
-                .ok_or_else(|| bad(format!("`{item}` is not key=value")))?;
+            let item = item.trim();
+            match item {
+                "exact" => {
+                    t = Tolerance::exact();
+                    continue;
+                }
+                "gpu" => {
+                    t = Tolerance::gpu();
+                    continue;
+                }
+                _ => {}
+            }
+            let (key, value) = item.split_once('=').ok_or_else(|| {
+                bad(format!(
+                    "`{item}` is neither a preset (exact, gpu) nor key=value ({KEYS})"
+                ))
+            })?;
             let (key, value) = (key.trim(), value.trim());
             let number = |lo: f64, hi: f64| -> Result<f64, CompareError> {
                 let v: f64 = value
@@ -115,9 +155,18 @@ impl Tolerance {
                 }
             };
             match key {
-                "threshold" => t.channel_threshold = number(0.0, 255.0)?.round() as u8,
-                "over" => t.max_over_fraction = number(0.0, 1.0)?,
-                "neighbour-over" => t.max_neighbour_over_fraction = Some(number(0.0, 1.0)?),
+                "threshold" => {
+                    t.channel_threshold = number(0.0, 255.0)?.round() as u8;
+                    threshold_named = true;
+                }
+                "over" => {
+                    t.max_over_fraction = Some(number(0.0, 1.0)?);
+                    over_named = true;
+                }
+                "neighbour-over" => {
+                    t.max_neighbour_over_fraction = Some(number(0.0, 1.0)?);
+                    over_named = true;
+                }
                 "flip-mean" => t.max_flip_mean = Some(number(0.0, 1.0)? as f32),
                 "psnr" => t.min_psnr = Some(number(0.0, 1000.0)?),
                 k if k.starts_with("flip-p") => {
@@ -128,37 +177,81 @@ impl Tolerance {
                         .ok_or_else(|| bad(format!("{k}: percentile must be 0..=100")))?;
                     t.max_flip_percentile = Some(((p / 100.0) as f32, number(0.0, 1.0)? as f32));
                 }
-                _ => {
-                    return Err(bad(format!(
-                        "unknown key `{key}` (threshold, over, neighbour-over, flip-mean, flip-pNN, psnr)"
-                    )));
-                }
+                _ => return Err(bad(format!("unknown key `{key}` ({KEYS})"))),
             }
         }
+        if threshold_named && !over_named && t.max_over_fraction.is_none() {
+            t.max_over_fraction = Some(0.0);
+        }
         Ok(t)
+    }
+
+    /// Whether nothing is checked (every comparison passes).
+    pub fn is_unconstrained(&self) -> bool {
+        self.max_over_fraction.is_none()
+            && self.max_neighbour_over_fraction.is_none()
+            && self.max_flip_mean.is_none()
+            && self.max_flip_percentile.is_none()
+            && self.min_psnr.is_none()
+    }
+
+    /// The criteria checked, one phrase each, in the order of the verdict.
+    pub fn criteria(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let t = self.channel_threshold;
+        if let Some(v) = self.max_over_fraction {
+            out.push(if t == 0 && v == 0.0 {
+                "every pixel equal".to_string()
+            } else {
+                format!("pixels more than {t} steps off ≤ {}%", 100.0 * v)
+            });
+        }
+        if let Some(v) = self.max_neighbour_over_fraction {
+            out.push(format!(
+                "pixels more than {t} steps off with no 3×3 neighbour match ≤ {}%",
+                100.0 * v
+            ));
+        }
+        if let Some(v) = self.max_flip_mean {
+            out.push(format!("FLIP mean ≤ {v}"));
+        }
+        if let Some((p, v)) = self.max_flip_percentile {
+            out.push(format!("FLIP {}th percentile ≤ {v}", p * 100.0));
+        }
+        if let Some(v) = self.min_psnr {
+            out.push(format!("PSNR ≥ {v} dB"));
+        }
+        out
     }
 }
 
 impl fmt::Display for Tolerance {
+    /// The tolerance as `parse` reads it: only the criteria checked (`none` when nothing is).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "threshold={},over={}",
-            self.channel_threshold, self.max_over_fraction
-        )?;
+        let mut items = Vec::new();
+        if self.max_over_fraction.is_some() || self.max_neighbour_over_fraction.is_some() {
+            items.push(format!("threshold={}", self.channel_threshold));
+        }
+        if let Some(v) = self.max_over_fraction {
+            items.push(format!("over={v}"));
+        }
         if let Some(v) = self.max_neighbour_over_fraction {
-            write!(f, ",neighbour-over={v}")?;
+            items.push(format!("neighbour-over={v}"));
         }
         if let Some(v) = self.max_flip_mean {
-            write!(f, ",flip-mean={v}")?;
+            items.push(format!("flip-mean={v}"));
         }
         if let Some((p, v)) = self.max_flip_percentile {
-            write!(f, ",flip-p{}={v}", p * 100.0)?;
+            items.push(format!("flip-p{}={v}", p * 100.0));
         }
         if let Some(v) = self.min_psnr {
-            write!(f, ",psnr={v}")?;
+            items.push(format!("psnr={v}"));
         }
-        Ok(())
+        if items.is_empty() {
+            f.write_str("none")
+        } else {
+            f.write_str(&items.join(","))
+        }
     }
 }
 
@@ -229,6 +322,8 @@ pub struct Comparison {
     pub flip: FlipStats,
     /// The tolerance the verdict used.
     pub tolerance: Tolerance,
+    /// The criteria the verdict checked, one phrase each ([`Tolerance::criteria`]).
+    pub checked: Vec<String>,
     /// Every bound exceeded, one line each; empty when within tolerance.
     pub failures: Vec<String>,
 }
@@ -295,12 +390,23 @@ impl fmt::Display for Comparison {
             self.flip.mean, self.flip.median, self.flip.p95, self.flip.p99, self.flip.max
         )?;
         writeln!(f, "tolerance       {}", self.tolerance)?;
+        if self.checked.is_empty() {
+            writeln!(f, "checked         nothing (no bound given)")?;
+        } else {
+            writeln!(f, "checked         {}", self.checked.join("; "))?;
+        }
         if self.failures.is_empty() {
-            write!(f, "verdict         within tolerance")
+            write!(
+                f,
+                "verdict         within tolerance ({} criteria checked)",
+                self.checked.len()
+            )
         } else {
             write!(
                 f,
-                "verdict         OUTSIDE tolerance: {}",
+                "verdict         OUTSIDE tolerance on {} of {} criteria: {}",
+                self.failures.len(),
+                self.checked.len(),
                 self.failures.join("; ")
             )
         }
@@ -442,20 +548,24 @@ pub fn compare_images(
         neighbour_over_threshold,
         flip,
         tolerance: tolerance.clone(),
+        checked: tolerance.criteria(),
         failures: Vec::new(),
     };
     c.failures = judge(&c, tolerance);
     Ok(c)
 }
 
-fn judge(c: &Comparison, t: &Tolerance) -> Vec<String> {
+/// Every bound of `t` that `c`'s figures exceed, one line each (empty: within tolerance).
+pub fn judge(c: &Comparison, t: &Tolerance) -> Vec<String> {
     let mut failures = Vec::new();
-    if c.over_fraction() > t.max_over_fraction {
+    if let Some(max) = t.max_over_fraction
+        && c.over_fraction() > max
+    {
         failures.push(format!(
             "{:.4}% of pixels differ by more than {} (allowed {:.4}%)",
             100.0 * c.over_fraction(),
             t.channel_threshold,
-            100.0 * t.max_over_fraction
+            100.0 * max
         ));
     }
     if let Some(max) = t.max_neighbour_over_fraction
@@ -624,9 +734,58 @@ mod tests {
         assert_eq!(t.max_flip_percentile, Some((0.99, 0.4)));
         assert_eq!(Tolerance::parse(&t.to_string()).unwrap(), t);
         assert_eq!(Tolerance::parse("exact").unwrap(), Tolerance::exact());
+        assert_eq!(Tolerance::parse("").unwrap(), Tolerance::exact());
+        assert_eq!(Tolerance::parse("gpu").unwrap().to_string(), GPU_TOLERANCE);
+        assert_eq!(Tolerance::parse("gpu").unwrap(), Tolerance::gpu());
+        // A preset then an override, read left to right.
+        let t = Tolerance::parse("gpu,psnr=35").unwrap();
+        assert_eq!(t.min_psnr, Some(35.0));
+        assert_eq!(t.max_flip_mean, Some(0.015));
+        // Threshold alone allows no pixel over it.
+        let t = Tolerance::parse("threshold=4").unwrap();
+        assert_eq!((t.channel_threshold, t.max_over_fraction), (4, Some(0.0)));
+        assert_eq!(Tolerance::parse(&t.to_string()).unwrap(), t);
         assert!(Tolerance::parse("over=2").is_err());
+        assert!(Tolerance::parse("gpus").is_err());
         assert!(Tolerance::parse("colour=1").is_err());
         assert!(Tolerance::parse("threshold").is_err());
+    }
+
+    #[test]
+    fn a_partial_tolerance_checks_only_what_it_names() {
+        // One pixel 40 steps off out of 10,000: exact fails, but a FLIP-mean bound alone
+        // (FLIP mean of one pixel in 10,000 is tiny) passes, and says it checked only that.
+        let a = solid(100, 100, [100, 100, 100, 255]);
+        let mut b = a.clone();
+        b.put_pixel(50, 50, image::Rgba([140, 100, 100, 255]));
+        let t = Tolerance::parse("flip-mean=0.015").unwrap();
+        assert_eq!(t.max_over_fraction, None);
+        let c = compare_images(&a, &b, &t).unwrap();
+        assert!(c.passed(), "{c}");
+        assert_eq!(c.checked, vec!["FLIP mean ≤ 0.015".to_string()]);
+        let text = c.to_string();
+        assert!(text.contains("checked         FLIP mean ≤ 0.015"), "{text}");
+        assert!(
+            text.contains("within tolerance (1 criteria checked)"),
+            "{text}"
+        );
+        let strict = compare_images(&a, &b, &Tolerance::exact()).unwrap();
+        assert!(!strict.passed());
+        assert!(
+            strict
+                .to_string()
+                .contains("OUTSIDE tolerance on 1 of 1 criteria")
+        );
+        // A PSNR bound alone: one pixel 40 steps off in one channel of 30,000 values.
+        let psnr = compare_images(&a, &b, &Tolerance::parse("psnr=60").unwrap()).unwrap();
+        assert!(psnr.passed(), "{psnr}");
+        let psnr = compare_images(&a, &b, &Tolerance::parse("psnr=70").unwrap()).unwrap();
+        assert_eq!(psnr.failures.len(), 1, "{psnr}");
+        // Nothing named: nothing checked, said so.
+        let none = compare_images(&a, &b, &Tolerance::unconstrained()).unwrap();
+        assert!(none.passed() && none.checked.is_empty());
+        assert!(none.to_string().contains("checked         nothing"));
+        assert_eq!(Tolerance::unconstrained().to_string(), "none");
     }
 
     #[test]

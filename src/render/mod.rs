@@ -541,6 +541,21 @@ impl PreparedScene {
         )
     }
 
+    /// [`Self::render_at`] with the framebuffer's float values too (row-major RGBA, row 0 at
+    /// the top), as they are before the 8-bit rounding: for float and 16-bit outputs. The
+    /// 8-bit image is the same bytes as [`Self::render_at`]'s.
+    pub fn render_linear_at(
+        &self,
+        time: f32,
+        tile_size: u32,
+    ) -> Result<(RenderedImage, Vec<Vec4>), RenderError> {
+        let level = SimdLevel::active();
+        let (fb, stats) =
+            self.draw_framebuffer(&self.scene, time, tile_size, stage_at(level), level)?;
+        let linear = fb.to_rgba_f32();
+        Ok((self.finish_image(&fb, stats), linear))
+    }
+
     /// One frame of `s`, whose seed, mesh and fur are those of the bake (see [`Self::render_with`]).
     fn draw(
         &self,
@@ -550,6 +565,30 @@ impl PreparedScene {
         stage: FragmentStage,
         level: SimdLevel,
     ) -> Result<RenderedImage, RenderError> {
+        let (fb, stats) = self.draw_framebuffer(s, time, tile_size, stage, level)?;
+        Ok(self.finish_image(&fb, stats))
+    }
+
+    /// The 8-bit image of a drawn framebuffer.
+    fn finish_image(&self, fb: &Framebuffer, stats: RasterStats) -> RenderedImage {
+        RenderedImage {
+            width: fb.width(),
+            height: fb.height(),
+            rgba8: fb.to_rgba8(),
+            stats,
+            warnings: self.warnings.clone(),
+        }
+    }
+
+    /// [`Self::draw`]'s framebuffer, before rounding, and its counters.
+    fn draw_framebuffer(
+        &self,
+        s: &Scene,
+        time: f32,
+        tile_size: u32,
+        stage: FragmentStage,
+        level: SimdLevel,
+    ) -> Result<(Framebuffer, RasterStats), RenderError> {
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
         let camera = Camera {
@@ -757,13 +796,7 @@ impl PreparedScene {
         }
 
         let stats = frame.finish();
-        Ok(RenderedImage {
-            width,
-            height,
-            rgba8: fb.to_rgba8(),
-            stats,
-            warnings: self.warnings.clone(),
-        })
+        Ok((fb, stats))
     }
 
     /// Level of detail for a frame of `s` with the object moved by `moved`: `None` without
