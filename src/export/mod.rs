@@ -11,6 +11,9 @@
 //! DIR/textures/fin_colour.png, fin_tangent.png
 //! DIR/textures/mips/<name>_L.png       mip level L ≥ 1 of each texture above
 //! DIR/textures/maps/<map>.png          the surface maps (length, density, direction, colour)
+//! DIR/shaders/                         with feature `gpu`: fur.wgsl, and in glsl-450/,
+//!                                      glsl-es-300/, hlsl/, msl/, spirv/ its translation with
+//!                                      bindings.md and bindings.json ([`crate::gpu::translate`])
 //! ```
 //!
 //! **Textures.** RGBA8 PNG, no colour space (linear values), row 0 at `v = 0`: upload as is.
@@ -221,6 +224,15 @@ pub fn export(
     w.write("meshes/fur.bin", &bin)?;
     let text = serde_json::to_string_pretty(&gltf).expect("JSON of plain values");
     w.write("meshes/fur.gltf", text.as_bytes())?;
+
+    // The shader in every GPU language, with its bindings (feature `gpu`).
+    #[cfg(feature = "gpu")]
+    for file in crate::gpu::translate::translate_all().map_err(|e| ExportError::Write {
+        path: dir.join("shaders"),
+        message: e.to_string(),
+    })? {
+        w.write(&format!("shaders/{}", file.path), &file.bytes)?;
+    }
 
     let json = scene_json(prepared, time, layers, fin, Value::Object(maps));
     let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
