@@ -218,3 +218,91 @@ fn khronos_validator_reports_no_error() {
         assert!(count(&report, "numErrors") >= 2, "{name}: {report}");
     }
 }
+
+/// The `conventions` of `scene.json` say what the exported data does: each claim checked on the
+/// data itself.
+#[test]
+fn scene_json_conventions_hold_on_the_data() {
+    let dir = export("conventions", "torus");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).expect("read"))
+            .expect("scene.json");
+    let c = &json["conventions"];
+    for key in [
+        "v_direction",
+        "tangent_frame",
+        "alpha",
+        "blend_state",
+        "colour_space",
+        "depth_range",
+        "ndc_y",
+    ] {
+        assert!(c[key].is_string(), "conventions.{key} missing");
+    }
+    for engine in [
+        "opengl", "vulkan", "direct3d", "metal", "unity", "unreal", "godot", "gltf",
+    ] {
+        assert!(c["engines"][engine]["v"].is_string(), "{engine}");
+    }
+
+    // Tangent frame: B = w·(N × T), along +v (∂p/∂v), for every skin vertex.
+    let root = root(&dir);
+    let bin = std::fs::read(dir.join("meshes/fur.bin")).expect("bin");
+    let skin = &root.meshes[0].primitives[0];
+    let attr = |s: gj::mesh::Semantic| {
+        floats(
+            &root,
+            &bin,
+            skin.attributes[&gj::validation::Checked::Valid(s)],
+        )
+    };
+    let normal = attr(gj::mesh::Semantic::Normals);
+    let tangent = attr(gj::mesh::Semantic::Tangents);
+    let binormal = attr(gj::mesh::Semantic::Extras("BINORMAL".into()));
+    let dpdv = attr(gj::mesh::Semantic::Extras("DPDV".into()));
+    let v3 = |a: &[f32], i: usize| glam::Vec3::new(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
+    let vertices = normal.len() / 3;
+    assert!(vertices > 0);
+    for i in 0..vertices {
+        let (n, b) = (v3(&normal, i), v3(&binormal, i));
+        let t = glam::Vec3::new(tangent[4 * i], tangent[4 * i + 1], tangent[4 * i + 2]);
+        let w = tangent[4 * i + 3];
+        assert!(w == 1.0 || w == -1.0);
+        let rebuilt = n.cross(t) * w;
+        assert!(rebuilt.dot(b) > 0.9, "vertex {i}: B ≠ w·(N × T)");
+        assert!(b.dot(v3(&dpdv, i)) > 0.0, "vertex {i}: B not along +v");
+    }
+
+    // Straight alpha: a premultiplied texture never has a channel above its alpha.
+    let colour = image::open(dir.join("textures/shell_05_colour.png"))
+        .expect("texture")
+        .to_rgba8();
+    assert!(
+        colour
+            .pixels()
+            .any(|p| p[3] > 0 && p[3] < 255 && p.0[..3].iter().any(|&c| c > p[3])),
+        "no texel shows straight alpha"
+    );
+
+    // Depth range [0, 1]: the projection takes the near plane to z = 0, the far one to 1.
+    let projection: Vec<f32> = json["camera"]["projection"]
+        .as_array()
+        .expect("projection")
+        .iter()
+        .map(|v| v.as_f64().expect("float") as f32)
+        .collect();
+    let p = glam::Mat4::from_cols_slice(&projection);
+    let (near, far) = (
+        json["scene"]["camera"]["near"].as_f64().expect("near") as f32,
+        json["scene"]["camera"]["far"].as_f64().expect("far") as f32,
+    );
+    let ndc_z = |d: f32| {
+        let clip = p * glam::Vec4::new(0.0, 0.0, -d, 1.0);
+        clip.z / clip.w
+    };
+    assert!(ndc_z(near).abs() < 1e-5, "near → {}", ndc_z(near));
+    assert!((ndc_z(far) - 1.0).abs() < 1e-5, "far → {}", ndc_z(far));
+    // NDC +y is up: a point above the view axis lands at positive y.
+    let up = p * glam::Vec4::new(0.0, 1.0, -(near + far) * 0.5, 1.0);
+    assert!(up.y / up.w > 0.0);
+}

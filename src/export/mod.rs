@@ -536,6 +536,23 @@ fn scene_json(
             "shadow_lookups": "texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋, alpha channel",
         },
         "conventions": {
+            "v_direction": "texture row 0 (the top row of the PNG) is at v = 0, v grows down the image, as glTF, D3D, Metal, Vulkan and Godot address textures: upload the rows as they are; OpenGL also puts the first uploaded row at t = 0 (do not flip on load); Unity puts v = 0 at the bottom row of an imported texture: sample (u, 1 − v)",
+            "tangent_frame": "TANGENT.xyz = T along +u, TANGENT.w = ±1 with B = w·(N × T) along +v (glTF's rule); tangent maps in the frame (x = T, y = B, z = N); pelage's own frames, not MikkTSpace: use the exported ones; where v is flipped (Unity), negate B and the tangent map's y",
+            "alpha": "straight (not premultiplied) in every colour texture and in the blend",
+            "blend_state": "colour = src·a + dst·(1 − a), alpha = a + dst·(1 − a): (SRC_ALPHA, ONE_MINUS_SRC_ALPHA) for colour, (ONE, ONE_MINUS_SRC_ALPHA) for alpha",
+            "colour_space": "linear values everywhere: textures are read as byte/255 (UNORM, not sRGB formats), the target is written without sRGB encoding",
+            "depth_range": "NDC z in [0, 1] (0 at the near plane), cleared to 1.0, LESS for the skin, LESS_EQUAL without writes for fins and shells; not reversed",
+            "ndc_y": "NDC +y is the top row of the image",
+            "engines": {
+                "opengl": { "v": "as is", "depth": "glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)", "colour": "GL_RGBA8 textures, GL_FRAMEBUFFER_SRGB off", "readback": "glReadPixels gives the bottom row first: flip" },
+                "vulkan": { "v": "as is", "depth": "native [0, 1]", "colour": "R8G8B8A8_UNORM", "clip_y": "the SPIR-V negates y: viewport of positive height" },
+                "direct3d": { "v": "as is", "depth": "native [0, 1]", "colour": "DXGI_FORMAT_R8G8B8A8_UNORM" },
+                "metal": { "v": "as is", "depth": "native [0, 1]", "colour": "MTLPixelFormatRGBA8Unorm" },
+                "unity": { "v": "1 − v (or flip the textures)", "depth": "reversed Z on D3D/Vulkan/Metal: use Unity's own projection with the same camera", "colour": "textures with sRGB off, a linear RenderTexture for the comparison" },
+                "unreal": { "v": "as is", "depth": "reversed Z: use Unreal's own projection with the same camera", "colour": "textures with sRGB off" },
+                "godot": { "v": "as is", "depth": "reversed Z in Godot 4: use Godot's own projection with the same camera", "colour": "samplers without source_color; Godot encodes its output to sRGB: read back before, or decode" },
+                "gltf": { "v": "as is", "colour": "glTF declares baseColorTexture sRGB: a viewer decodes the colour textures as sRGB, so its blend differs from pelage's" }
+            },
             "clip_space": "0 ≤ z ≤ w (wgpu/Vulkan/D3D)",
             "output": "8-bit channel = ⌊255·clamp(c, 0, 1) + 0.5⌋, no colour-space conversion",
             "texel": "byte / 255, linear",
