@@ -11,6 +11,9 @@
 //! DIR/textures/fin_colour.png, fin_tangent.png
 //! DIR/textures/mips/<name>_L.png       mip level L ≥ 1 of each texture above
 //! DIR/textures/maps/<map>.png          the surface maps (length, density, direction, colour)
+//! DIR/shaders/                         with feature `gpu`: fur.wgsl, and in glsl-450/,
+//!                                      glsl-es-300/, hlsl/, msl/, spirv/ its translation with
+//!                                      bindings.md and bindings.json ([`crate::gpu::translate`])
 //! ```
 //!
 //! **Textures.** RGBA8 PNG, no colour space (linear values), row 0 at `v = 0`: upload as is.
@@ -50,7 +53,12 @@
 //!   space), `_MESH_UV` (the root's mesh uv, where the maps are read), `_LENGTH` (the length
 //!   map at the root; 1 at the bottom corners). Fin positions include the object's offset.
 //!
-//! Triangles are counter-clockwise seen from outside; indices are u32.
+//! Triangles are counter-clockwise seen from outside; indices are u32. The skin and shells
+//! also carry `TEXCOORD_1`, the fur uv (`uv × texture_repeat`). Materials (written with the
+//! typed `gltf-json` crate): `skin` opaque (fur colour × 0.35); `shell_NN` its colour texture
+//! in `TEXCOORD_1`, `alphaMode` `BLEND`; `fins` the fin colour texture, clamp v, double-sided;
+//! each fur material's `extras` name the tangent texture, density bands and mip files. The
+//! default scene's nodes are in draw order (`extras.draw_order`).
 //!
 //! **scene.json.** `scene` repeats the scene file with every default filled in (the names of
 //! the TOML keys); `camera` has the column-major `view`, `projection` and `view_projection`
@@ -66,6 +74,7 @@ use crate::render::fragment::{ALPHA_DISCARD, Spot};
 use crate::render::{PreparedScene, RenderError};
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
+use gltf_json as gj;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -90,6 +99,23 @@ pub enum ExportError {
 pub struct ExportSummary {
     /// Every file written, relative to the export folder.
     pub files: Vec<PathBuf>,
+}
+
+/// The files of one exported texture, relative to the export folder.
+#[derive(Clone, Debug, Default)]
+struct TextureFiles {
+    /// `textures/NAME.png`.
+    level0: String,
+    /// `textures/mips/NAME_L.png`, L = 1, 2, …
+    mips: Vec<String>,
+}
+
+/// The textures of a shell layer or of the fins, for the glTF's materials.
+#[derive(Clone, Debug, Default)]
+struct LayerTextures {
+    colour: TextureFiles,
+    tangent: TextureFiles,
+    density: Option<TextureFiles>,
 }
 
 struct Writer<'a> {
@@ -128,7 +154,8 @@ impl Writer<'_> {
     }
 
     /// Level 0 as `textures/NAME.png`, levels ≥ 1 as `textures/mips/NAME_L.png`.
-    fn texture(&mut self, name: &str, texture: &Texture) -> Result<String, ExportError> {
+    fn texture(&mut self, name: &str, texture: &Texture) -> Result<TextureFiles, ExportError> {
+        let mut mips = Vec::new();
         for k in 0..texture.level_count() {
             let level = texture.level(k).expect("level in range");
             let rgba: Vec<u8> = level.texels.iter().flatten().copied().collect();
@@ -138,8 +165,14 @@ impl Writer<'_> {
                 format!("textures/mips/{name}_{k}.png")
             };
             self.png(&relative, level.width, level.height, &rgba)?;
+            if k > 0 {
+                mips.push(relative);
+            }
         }
-        Ok(format!("textures/{name}.png"))
+        Ok(TextureFiles {
+            level0: format!("textures/{name}.png"),
+            mips,
+        })
     }
 }
 
@@ -159,6 +192,7 @@ pub fn export(
 
     let lod = prepared.level_of_detail_at(time);
     let mut layers = Vec::new();
+    let mut shell_textures = Vec::new();
     for i in 0..prepared.shell_count() {
         let (colour, tangent) = prepared.shell_textures(i).expect("layer in range");
         let colour_file = w.texture(&format!("shell_{i:02}_colour"), colour)?;
@@ -175,11 +209,16 @@ pub fn export(
             "height_fraction": p.height_fraction,
             "max_shell": p.max_shell,
             "lod_span": lod.as_ref().map_or(1.0, |l| l.spans[i]),
-            "colour_texture": colour_file,
-            "tangent_texture": tangent_file,
-            "density_texture": density_file,
+            "colour_texture": colour_file.level0,
+            "tangent_texture": tangent_file.level0,
+            "density_texture": density_file.as_ref().map(|d| &d.level0),
             "mip_levels": colour.level_count(),
         }));
+        shell_textures.push(LayerTextures {
+            colour: colour_file,
+            tangent: tangent_file,
+            density: density_file,
+        });
     }
     let surface = prepared.maps();
     let mut maps = serde_json::Map::new();
@@ -197,10 +236,18 @@ pub fn export(
             maps.insert(name.to_string(), json!(relative));
         }
     }
+    let mut fin_textures = None;
     let fin = match prepared.fin_textures() {
         Some((colour, tangent)) => {
-            let colour_file = w.texture("fin_colour", colour)?;
-            let tangent_file = w.texture("fin_tangent", tangent)?;
+            let colour_files = w.texture("fin_colour", colour)?;
+            let tangent_files = w.texture("fin_tangent", tangent)?;
+            let (colour_file, tangent_file) =
+                (colour_files.level0.clone(), tangent_files.level0.clone());
+            fin_textures = Some(LayerTextures {
+                colour: colour_files,
+                tangent: tangent_files,
+                density: None,
+            });
             json!({
                 "height": prepared.fin_height(),
                 "colour_texture": colour_file,
@@ -217,10 +264,19 @@ pub fn export(
         None => Value::Null,
     };
 
-    let (gltf, bin) = gltf(prepared, time);
+    let (gltf, bin) = gltf(prepared, time, &shell_textures, fin_textures.as_ref());
     w.write("meshes/fur.bin", &bin)?;
     let text = serde_json::to_string_pretty(&gltf).expect("JSON of plain values");
     w.write("meshes/fur.gltf", text.as_bytes())?;
+
+    // The shader in every GPU language, with its bindings (feature `gpu`).
+    #[cfg(feature = "gpu")]
+    for file in crate::gpu::translate::translate_all().map_err(|e| ExportError::Write {
+        path: dir.join("shaders"),
+        message: e.to_string(),
+    })? {
+        w.write(&format!("shaders/{}", file.path), &file.bytes)?;
+    }
 
     let json = scene_json(prepared, time, layers, fin, Value::Object(maps));
     let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
@@ -480,6 +536,23 @@ fn scene_json(
             "shadow_lookups": "texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋, alpha channel",
         },
         "conventions": {
+            "v_direction": "texture row 0 (the top row of the PNG) is at v = 0, v grows down the image, as glTF, D3D, Metal, Vulkan and Godot address textures: upload the rows as they are; OpenGL also puts the first uploaded row at t = 0 (do not flip on load); Unity puts v = 0 at the bottom row of an imported texture: sample (u, 1 − v)",
+            "tangent_frame": "TANGENT.xyz = T along +u, TANGENT.w = ±1 with B = w·(N × T) along +v (glTF's rule); tangent maps in the frame (x = T, y = B, z = N); pelage's own frames, not MikkTSpace: use the exported ones; where v is flipped (Unity), negate B and the tangent map's y",
+            "alpha": "straight (not premultiplied) in every colour texture and in the blend",
+            "blend_state": "colour = src·a + dst·(1 − a), alpha = a + dst·(1 − a): (SRC_ALPHA, ONE_MINUS_SRC_ALPHA) for colour, (ONE, ONE_MINUS_SRC_ALPHA) for alpha",
+            "colour_space": "linear values everywhere: textures are read as byte/255 (UNORM, not sRGB formats), the target is written without sRGB encoding",
+            "depth_range": "NDC z in [0, 1] (0 at the near plane), cleared to 1.0, LESS for the skin, LESS_EQUAL without writes for fins and shells; not reversed",
+            "ndc_y": "NDC +y is the top row of the image",
+            "engines": {
+                "opengl": { "v": "as is", "depth": "glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE)", "colour": "GL_RGBA8 textures, GL_FRAMEBUFFER_SRGB off", "readback": "glReadPixels gives the bottom row first: flip" },
+                "vulkan": { "v": "as is", "depth": "native [0, 1]", "colour": "R8G8B8A8_UNORM", "clip_y": "the SPIR-V negates y: viewport of positive height" },
+                "direct3d": { "v": "as is", "depth": "native [0, 1]", "colour": "DXGI_FORMAT_R8G8B8A8_UNORM" },
+                "metal": { "v": "as is", "depth": "native [0, 1]", "colour": "MTLPixelFormatRGBA8Unorm" },
+                "unity": { "v": "1 − v (or flip the textures)", "depth": "reversed Z on D3D/Vulkan/Metal: use Unity's own projection with the same camera", "colour": "textures with sRGB off, a linear RenderTexture for the comparison" },
+                "unreal": { "v": "as is", "depth": "reversed Z: use Unreal's own projection with the same camera", "colour": "textures with sRGB off" },
+                "godot": { "v": "as is", "depth": "reversed Z in Godot 4: use Godot's own projection with the same camera", "colour": "samplers without source_color; Godot encodes its output to sRGB: read back before, or decode" },
+                "gltf": { "v": "as is", "colour": "glTF declares baseColorTexture sRGB: a viewer decodes the colour textures as sRGB, so its blend differs from pelage's" }
+            },
             "clip_space": "0 ≤ z ≤ w (wgpu/Vulkan/D3D)",
             "output": "8-bit channel = ⌊255·clamp(c, 0, 1) + 0.5⌋, no colour-space conversion",
             "texel": "byte / 255, linear",
@@ -490,12 +563,20 @@ fn scene_json(
     })
 }
 
-/// A glTF 2.0 document and its binary buffer, built accessor by accessor.
+/// A glTF 2.0 document (typed, `gltf-json`) and its binary buffer, built accessor by accessor.
 #[derive(Default)]
 struct GltfBuilder {
+    root: gj::Root,
     bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+}
+
+/// `value` as a glTF `extras` object.
+fn extras(value: &Value) -> gj::extras::Extras {
+    serde_json::value::to_raw_value(value).ok()
+}
+
+fn checked<T>(value: T) -> gj::validation::Checked<T> {
+    gj::validation::Checked::Valid(value)
 }
 
 impl GltfBuilder {
@@ -505,25 +586,35 @@ impl GltfBuilder {
         }
     }
 
-    /// Float vectors of `n` components; returns the accessor index. `bounds` adds min/max
-    /// (required on POSITION).
-    fn floats(&mut self, data: &[f32], n: usize, bounds: bool) -> usize {
+    fn view(&mut self, offset: usize, target: gj::buffer::Target) -> gj::Index<gj::buffer::View> {
+        self.root.push(gj::buffer::View {
+            buffer: gj::Index::new(0),
+            byte_length: (self.bin.len() - offset).into(),
+            byte_offset: Some(offset.into()),
+            byte_stride: None,
+            name: None,
+            target: Some(checked(target)),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// Float vectors of `n` components; returns the accessor. `bounds` adds min/max (required
+    /// on POSITION).
+    fn floats(&mut self, data: &[f32], n: usize, bounds: bool) -> gj::Index<gj::Accessor> {
         self.align();
         let offset = self.bin.len();
         for v in data {
             self.bin.extend_from_slice(&v.to_le_bytes());
         }
-        self.views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4, "target": 34962 }));
+        let view = self.view(offset, gj::buffer::Target::ArrayBuffer);
         let kind = match n {
-            1 => "SCALAR",
-            2 => "VEC2",
-            3 => "VEC3",
-            _ => "VEC4",
+            1 => gj::accessor::Type::Scalar,
+            2 => gj::accessor::Type::Vec2,
+            3 => gj::accessor::Type::Vec3,
+            _ => gj::accessor::Type::Vec4,
         };
-        let mut accessor = json!({
-            "bufferView": self.views.len() - 1, "componentType": 5126,
-            "count": data.len() / n, "type": kind,
-        });
+        let (mut min, mut max) = (None, None);
         if bounds {
             let mut lo = vec![f32::INFINITY; n];
             let mut hi = vec![f32::NEG_INFINITY; n];
@@ -533,43 +624,188 @@ impl GltfBuilder {
                     hi[k] = hi[k].max(c[k]);
                 }
             }
-            accessor["min"] = json!(lo);
-            accessor["max"] = json!(hi);
+            min = Some(json!(lo));
+            max = Some(json!(hi));
         }
-        self.accessors.push(accessor);
-        self.accessors.len() - 1
+        self.root.push(gj::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: (data.len() / n).into(),
+            component_type: checked(gj::accessor::GenericComponentType(
+                gj::accessor::ComponentType::F32,
+            )),
+            extensions: None,
+            extras: None,
+            type_: checked(kind),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
     }
 
-    fn vec3s(&mut self, data: impl Iterator<Item = Vec3>, bounds: bool) -> usize {
+    fn vec3s(&mut self, data: impl Iterator<Item = Vec3>, bounds: bool) -> gj::Index<gj::Accessor> {
         let flat: Vec<f32> = data.flat_map(|v| v.to_array()).collect();
         self.floats(&flat, 3, bounds)
     }
 
-    fn vec2s(&mut self, data: impl Iterator<Item = Vec2>) -> usize {
+    fn vec2s(&mut self, data: impl Iterator<Item = Vec2>) -> gj::Index<gj::Accessor> {
         let flat: Vec<f32> = data.flat_map(|v| v.to_array()).collect();
         self.floats(&flat, 2, false)
     }
 
-    fn indices(&mut self, triangles: &[[u32; 3]]) -> usize {
+    fn indices(&mut self, triangles: &[[u32; 3]]) -> gj::Index<gj::Accessor> {
         self.align();
         let offset = self.bin.len();
         for i in triangles.iter().flatten() {
             self.bin.extend_from_slice(&i.to_le_bytes());
         }
-        self.views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": triangles.len() * 12, "target": 34963 }));
-        self.accessors.push(json!({
-            "bufferView": self.views.len() - 1, "componentType": 5125,
-            "count": triangles.len() * 3, "type": "SCALAR",
-        }));
-        self.accessors.len() - 1
+        let view = self.view(offset, gj::buffer::Target::ElementArrayBuffer);
+        self.root.push(gj::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: (triangles.len() * 3).into(),
+            component_type: checked(gj::accessor::GenericComponentType(
+                gj::accessor::ComponentType::U32,
+            )),
+            extensions: None,
+            extras: None,
+            type_: checked(gj::accessor::Type::Scalar),
+            min: None,
+            max: None,
+            name: None,
+            normalized: false,
+            sparse: None,
+        })
+    }
+
+    /// A texture of a PNG under the export folder (`file` relative to it), with `sampler`.
+    fn texture(
+        &mut self,
+        file: &str,
+        sampler: gj::Index<gj::texture::Sampler>,
+    ) -> gj::Index<gj::Texture> {
+        let image = self.root.push(gj::Image {
+            buffer_view: None,
+            mime_type: Some(gj::image::MimeType("image/png".into())),
+            name: Some(file.to_string()),
+            // fur.gltf lies in meshes/: the textures are one folder up.
+            uri: Some(format!("../{file}")),
+            extensions: None,
+            extras: None,
+        });
+        self.root.push(gj::Texture {
+            name: Some(file.to_string()),
+            sampler: Some(sampler),
+            source: image,
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    fn sampler(&mut self, wrap_t: gj::texture::WrappingMode) -> gj::Index<gj::texture::Sampler> {
+        self.root.push(gj::texture::Sampler {
+            mag_filter: Some(checked(gj::texture::MagFilter::Linear)),
+            min_filter: Some(checked(gj::texture::MinFilter::LinearMipmapLinear)),
+            name: None,
+            wrap_s: checked(gj::texture::WrappingMode::Repeat),
+            wrap_t: checked(wrap_t),
+            extensions: None,
+            extras: None,
+        })
+    }
+
+    /// A material of fur drawn with straight alpha blending, textured with `textures.colour`
+    /// in `TEXCOORD_n`, the rest named in its extras.
+    fn fur_material(
+        &mut self,
+        name: String,
+        textures: &LayerTextures,
+        tex_coord: u32,
+        sampler: gj::Index<gj::texture::Sampler>,
+        double_sided: bool,
+        more: Value,
+    ) -> gj::Index<gj::Material> {
+        let colour = self.texture(&textures.colour.level0, sampler);
+        let mut extra = json!({
+            "pelage": "fur layer: draw with fur.wgsl (or its translation in shaders/); this material is the colour texture alone",
+            "colour_mips": textures.colour.mips,
+            "tangent_texture": textures.tangent.level0,
+            "tangent_mips": textures.tangent.mips,
+            "density_texture": textures.density.as_ref().map(|d| &d.level0),
+            "density_mips": textures.density.as_ref().map(|d| &d.mips),
+        });
+        if let (Some(target), Value::Object(more)) = (extra.as_object_mut(), more) {
+            target.extend(more);
+        }
+        self.root.push(gj::Material {
+            alpha_mode: checked(gj::material::AlphaMode::Blend),
+            double_sided,
+            name: Some(name),
+            pbr_metallic_roughness: gj::material::PbrMetallicRoughness {
+                base_color_texture: Some(gj::texture::Info {
+                    index: colour,
+                    tex_coord,
+                    extensions: None,
+                    extras: None,
+                }),
+                metallic_factor: gj::material::StrengthFactor(0.0),
+                roughness_factor: gj::material::StrengthFactor(1.0),
+                ..Default::default()
+            },
+            extras: extras(&extra),
+            ..Default::default()
+        })
     }
 }
 
-fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
+fn primitive(
+    attributes: &[(gj::mesh::Semantic, gj::Index<gj::Accessor>)],
+    indices: gj::Index<gj::Accessor>,
+    material: gj::Index<gj::Material>,
+) -> gj::mesh::Primitive {
+    gj::mesh::Primitive {
+        attributes: attributes
+            .iter()
+            .map(|(semantic, index)| (checked(semantic.clone()), *index))
+            .collect(),
+        extensions: None,
+        extras: None,
+        indices: Some(indices),
+        material: Some(material),
+        mode: checked(gj::mesh::Mode::Triangles),
+        targets: None,
+    }
+}
+
+/// `meshes/fur.gltf`: one mesh and node per pass, in draw order (skin, fins, shells root to
+/// tip), each with its material; see the [module docs](self).
+fn gltf(
+    prepared: &PreparedScene,
+    time: f32,
+    shells: &[LayerTextures],
+    fin: Option<&LayerTextures>,
+) -> (gj::Root, Vec<u8>) {
+    use gj::mesh::Semantic;
     let mesh = prepared.mesh();
     let v = &mesh.vertices;
+    let s = prepared.scene();
     let mut b = GltfBuilder::default();
-    let mut meshes = Vec::new();
+    b.root.asset = gj::Asset {
+        generator: Some("pelage export".into()),
+        ..Default::default()
+    };
+    let mut skin_mesh = None;
+    let mut fin_mesh = None;
+    let new_mesh = |name: &str, primitive: gj::mesh::Primitive| gj::Mesh {
+        name: Some(name.to_string()),
+        primitives: vec![primitive],
+        weights: None,
+        extensions: None,
+        extras: None,
+    };
+    let mut shell_meshes = Vec::new();
     if !v.is_empty() && !mesh.indices.is_empty() {
         let position = b.vec3s(v.iter().map(|v| v.position), true);
         let normal = b.vec3s(v.iter().map(|v| v.normal), false);
@@ -587,27 +823,65 @@ fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
             .collect();
         let tangent = b.floats(&tangent, 4, false);
         let uv = b.vec2s(v.iter().map(|v| v.uv));
+        let repeat = Vec2::from(s.fur.texture_repeat);
+        let fur_uv = b.vec2s(v.iter().map(|v| v.uv * repeat));
         let binormal = b.vec3s(v.iter().map(|v| v.frame.binormal), false);
         let dpdu = b.vec3s(v.iter().map(|v| v.dpdu), false);
         let dpdv = b.vec3s(v.iter().map(|v| v.dpdv), false);
         let indices = b.indices(&mesh.indices);
-        let primitive = |position: usize| {
-            json!({
-                "attributes": {
-                    "POSITION": position, "NORMAL": normal, "TANGENT": tangent, "TEXCOORD_0": uv,
-                    "_BINORMAL": binormal, "_DPDU": dpdu, "_DPDV": dpdv,
-                },
-                "indices": indices, "mode": 4,
-            })
+        let attributes = |position| {
+            vec![
+                (Semantic::Positions, position),
+                (Semantic::Normals, normal),
+                (Semantic::Tangents, tangent),
+                (Semantic::TexCoords(0), uv),
+                (Semantic::TexCoords(1), fur_uv),
+                (Semantic::Extras("BINORMAL".into()), binormal),
+                (Semantic::Extras("DPDU".into()), dpdu),
+                (Semantic::Extras("DPDV".into()), dpdv),
+            ]
         };
-        meshes.push(json!({ "name": "skin", "primitives": [primitive(position)] }));
+        let skin_colour = s.fur.colour * 0.35;
+        let skin = b.root.push(gj::Material {
+            name: Some("skin".into()),
+            pbr_metallic_roughness: gj::material::PbrMetallicRoughness {
+                base_color_factor: gj::material::PbrBaseColorFactor(
+                    skin_colour.extend(1.0).to_array(),
+                ),
+                metallic_factor: gj::material::StrengthFactor(0.0),
+                roughness_factor: gj::material::StrengthFactor(1.0),
+                ..Default::default()
+            },
+            extras: extras(&json!({ "pelage": "skin: opaque, fur colour × 0.35, drawn first" })),
+            ..Default::default()
+        });
+        skin_mesh = Some((
+            "skin".to_string(),
+            new_mesh("skin", primitive(&attributes(position), indices, skin)),
+        ));
+        let sampler = b.sampler(gj::texture::WrappingMode::Repeat);
         for (i, &offset) in prepared.shell_offsets().iter().enumerate() {
             let p = b.vec3s(v.iter().map(|v| v.position + v.normal * offset), true);
-            meshes.push(json!({ "name": format!("shell_{i:02}"), "primitives": [primitive(p)] }));
+            let name = format!("shell_{i:02}");
+            let material = match shells.get(i) {
+                Some(textures) => b.fur_material(
+                    name.clone(),
+                    textures,
+                    1,
+                    sampler,
+                    false,
+                    json!({ "shell": i, "offset": offset }),
+                ),
+                None => skin,
+            };
+            shell_meshes.push((
+                name.clone(),
+                new_mesh(&name, primitive(&attributes(p), indices, material)),
+            ));
         }
     }
     let (fin_vertices, fin_triangles) = prepared.fin_quads_at(time);
-    if !fin_triangles.is_empty() && prepared.fin_textures().is_some() {
+    if let Some(textures) = fin.filter(|_| !fin_triangles.is_empty()) {
         let position = b.vec3s(fin_vertices.iter().map(|(p, _)| *p), true);
         let normal = b.vec3s(fin_vertices.iter().map(|(_, f)| f.normal), false);
         let uv = b.vec2s(fin_vertices.iter().map(|(_, f)| f.uv));
@@ -621,29 +895,66 @@ fn gltf(prepared: &PreparedScene, time: f32) -> (Value, Vec<u8>) {
         let length: Vec<f32> = fin_vertices.iter().map(|(_, f)| f.length).collect();
         let length = b.floats(&length, 1, false);
         let indices = b.indices(&fin_triangles);
-        meshes.push(json!({ "name": "fins", "primitives": [{
-            "attributes": {
-                "POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv,
-                "_LIGHT": light, "_EYE": eye, "_SHADOW": shadow, "_FADE": fade,
-                "_OBJECT": object, "_MESH_UV": mesh_uv, "_LENGTH": length,
-            },
-            "indices": indices, "mode": 4,
-        }]}));
+        let sampler = b.sampler(gj::texture::WrappingMode::ClampToEdge);
+        let material = b.fur_material(
+            "fins".into(),
+            textures,
+            0,
+            sampler,
+            true,
+            json!({ "fin_height": prepared.fin_height() }),
+        );
+        let attributes = [
+            (Semantic::Positions, position),
+            (Semantic::Normals, normal),
+            (Semantic::TexCoords(0), uv),
+            (Semantic::Extras("LIGHT".into()), light),
+            (Semantic::Extras("EYE".into()), eye),
+            (Semantic::Extras("SHADOW".into()), shadow),
+            (Semantic::Extras("FADE".into()), fade),
+            (Semantic::Extras("OBJECT".into()), object),
+            (Semantic::Extras("MESH_UV".into()), mesh_uv),
+            (Semantic::Extras("LENGTH".into()), length),
+        ];
+        fin_mesh = Some((
+            "fins".to_string(),
+            new_mesh("fins", primitive(&attributes, indices, material)),
+        ));
     }
-    let nodes: Vec<Value> = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| json!({ "name": m["name"], "mesh": i }))
+    // Meshes skin, shells, fins (the order of earlier exports); nodes in draw order: skin, fins,
+    // shells root to tip.
+    let skin_index = skin_mesh.map(|(name, mesh)| (name, b.root.push(mesh)));
+    let shell_indices: Vec<_> = shell_meshes
+        .into_iter()
+        .map(|(name, mesh)| (name, b.root.push(mesh)))
         .collect();
-    let doc = json!({
-        "asset": { "version": "2.0", "generator": "pelage export" },
-        "scene": 0,
-        "scenes": [{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
-        "nodes": nodes,
-        "meshes": meshes,
-        "buffers": [{ "uri": "fur.bin", "byteLength": b.bin.len() }],
-        "bufferViews": b.views,
-        "accessors": b.accessors,
+    let fin_index = fin_mesh.map(|(name, mesh)| (name, b.root.push(mesh)));
+    let pushed = skin_index.into_iter().chain(fin_index).chain(shell_indices);
+    let mut nodes = Vec::new();
+    for (order, (name, mesh)) in pushed.enumerate() {
+        nodes.push(b.root.push(gj::Node {
+            mesh: Some(mesh),
+            name: Some(name),
+            extras: extras(&json!({ "draw_order": order })),
+            ..Default::default()
+        }));
+    }
+    let scene = b.root.push(gj::Scene {
+        nodes,
+        name: Some("pelage".into()),
+        extensions: None,
+        extras: extras(&json!({
+            "pelage": "draw the nodes in their order (skin, fins, shells root to tip): depth test on, depth writes off after the skin, straight alpha blending"
+        })),
     });
-    (doc, b.bin)
+    b.root.scene = Some(scene);
+    b.align();
+    b.root.buffers.push(gj::Buffer {
+        byte_length: b.bin.len().into(),
+        name: None,
+        uri: Some("fur.bin".into()),
+        extensions: None,
+        extras: None,
+    });
+    (b.root, b.bin)
 }

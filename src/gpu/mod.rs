@@ -32,6 +32,8 @@ use glam::{Mat4, Vec3, Vec4};
 use image::RgbaImage;
 use wgpu::util::DeviceExt;
 
+pub mod translate;
+
 /// The WGSL source of the fur shaders (entry points `vs_skin`, `fs_skin`, `vs_shell`, `vs_fin`,
 /// `fs_fur`).
 pub const SHADER_SOURCE: &str = include_str!("fur.wgsl");
@@ -1018,7 +1020,9 @@ fn spot_vec4s(spot: &Spot) -> [[f32; 4]; 4] {
 }
 
 /// The `FrameUniforms` of `fur.wgsl`, bytes in field order.
-fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
+/// The frame uniform buffer of `prepared` at `time` as the backend uploads it: `FrameUniforms`
+/// of `fur.wgsl` (its layout is written down by [`translate`] in every language).
+pub fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
     let s = prepared.scene();
     let camera = crate::export::camera(s);
     let view_proj: Mat4 = camera.view_projection(s.image.width as f32 / s.image.height as f32);
