@@ -14,7 +14,8 @@
 //!
 //! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
-//! steps 1–4 and 6 lane by lane, then steps 5 and 7 on the quad's lit lanes together
+//! steps 1–4 lane by lane, step 6 on the quad's lanes together (lookup `k` of every lane in one
+//! batch, [`shading::shell_shadow_lanes`]), then steps 5 and 7 on the quad's lit lanes together
 //! ([`crate::shading::lanes`]). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
@@ -158,7 +159,7 @@ impl Spot {
 
     /// [`Spot::weight_at`] with the normal already normalised (`normal.normalize_or_zero()`),
     /// as a fragment with several spots and matches computes it once.
-    #[inline]
+    #[inline(always)]
     pub fn weight_at_unit_normal(&self, object: Vec3, unit_normal: Vec3) -> (Vec3, f32) {
         match *self {
             Spot::Ellipsoid {
@@ -510,7 +511,24 @@ pub fn shade_fur(
     ) {
         Surface::Discarded => None,
         Surface::Finished(colour) => Some(colour),
-        Surface::Lit(lit) => {
+        Surface::Lit(lit, lookups) => {
+            let shadow = match lookups {
+                ShadowLookups::Taken(shadow) => shadow,
+                ShadowLookups::Pending { uv, offset } => {
+                    let level = textures.colour.nearest_level(lod);
+                    shading::shell_shadow(
+                        |at| textures.sampler.alpha_nearest_in(level, at),
+                        uv,
+                        offset,
+                        layer.lookups,
+                        p.shadow_texel,
+                    )
+                }
+            };
+            let lit = match shadowed(lit, shadow, p) {
+                Ok(lit) => lit,
+                Err(finished) => return Some(finished),
+            };
             let lighting = shading::strand_lighting(
                 lit.tangent(layer, p),
                 Vec3::Z,
@@ -548,7 +566,10 @@ pub fn shade_fur_quad(
     let unit_normals =
         Vec3x4::from_lanes(varyings.each_ref().map(|v| v.normal)).normalize_or_zero();
     let mut out = [None; 4];
-    let mut lit = [None; 4];
+    let mut unshadowed = [None; 4];
+    let mut pending = 0u32;
+    // Lanes without pending lookups look up at uv 0 (a valid texel); their sums are dropped.
+    let (mut shadow_uv, mut shadow_offset) = ([Vec2::ZERO; 4], [Vec2::ZERO; 4]);
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
             continue;
@@ -565,7 +586,39 @@ pub fn shade_fur_quad(
         ) {
             Surface::Discarded => {}
             Surface::Finished(colour) => out[lane] = Some(colour),
-            Surface::Lit(l) => lit[lane] = Some(l),
+            Surface::Lit(l, lookups) => {
+                if let ShadowLookups::Pending { uv, offset } = lookups {
+                    pending |= 1 << lane;
+                    (shadow_uv[lane], shadow_offset[lane]) = (uv, offset);
+                }
+                unshadowed[lane] = Some((l, lookups));
+            }
+        }
+    }
+    // Step 6 for the quad's lanes together: lookup k of every lane in one batch.
+    let shadows = if pending != 0 && layer.lookups > 0 {
+        shading::shell_shadow_lanes(
+            |u, v| reads.shadow.alpha_x4(u, v),
+            shadow_uv,
+            shadow_offset,
+            layer.lookups,
+            p.shadow_texel,
+        )
+    } else {
+        [0.0; 4]
+    };
+    let mut lit = [None; 4];
+    for lane in 0..4 {
+        let Some((l, lookups)) = unshadowed[lane] else {
+            continue;
+        };
+        let shadow = match lookups {
+            ShadowLookups::Taken(shadow) => shadow,
+            ShadowLookups::Pending { .. } => shadows[lane],
+        };
+        match shadowed(l, shadow, p) {
+            Ok(l) => lit[lane] = Some(l),
+            Err(finished) => out[lane] = Some(finished),
         }
     }
     let Some(&first) = lit.iter().flatten().next() else {
@@ -655,8 +708,18 @@ enum Surface {
     Discarded,
     /// A debug view's colour, final.
     Finished(Vec4),
-    /// Ready for strand lighting.
-    Lit(LitSurface),
+    /// Ready for the shell shadow (its `shadow` still 0) and then strand lighting.
+    Lit(LitSurface, ShadowLookups),
+}
+
+/// The shell shadow of one fragment (step 6), as [`surface`] leaves it.
+#[derive(Clone, Copy)]
+enum ShadowLookups {
+    /// Already summed (the density bands' lookups, one fragment at a time).
+    Taken(f32),
+    /// Lookups of the layer's shadow level still to take, from `uv` along `offset`
+    /// ([`shading::shell_shadow`]); the quad stage takes its lanes' together.
+    Pending { uv: Vec2, offset: Vec2 },
 }
 
 /// Everything eq. 3.7 needs of one fragment: the strand lighting's inputs as interpolated or
@@ -775,8 +838,8 @@ impl<'a> LevelReads<'a> {
     }
 }
 
-/// Steps 1–6 of the module's list for one fragment at the level of detail of `reads`:
-/// everything up to the strand lighting. `unit_normal` is `v.normal.normalize_or_zero()`,
+/// Steps 1–4 of the module's list for one fragment at the level of detail of `reads`, and
+/// where its shell shadow (step 6) looks: everything up to the shadow's lookups. `unit_normal` is `v.normal.normalize_or_zero()`,
 /// which the burn lobes and the light spots share.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the fragment, what its quad shares, and the layer's state
@@ -848,36 +911,41 @@ fn surface(
     let shadow = match (density, textures.density) {
         (Some(d), Some(bands)) => {
             let level = bands.nearest_level(lod);
-            shading::shell_shadow(
+            ShadowLookups::Taken(shading::shell_shadow(
                 |at| shading::density_alpha(sampler.sample_nearest_in(level, at), d),
                 uv,
                 offset,
                 layer.lookups,
                 p.shadow_texel,
-            )
+            ))
         }
-        _ => shading::shell_shadow_x4(
-            |u, v| reads.shadow.alpha_x4(u, v),
-            uv,
-            offset,
-            layer.lookups,
-            p.shadow_texel,
-        ),
+        _ => ShadowLookups::Pending { uv, offset },
     };
+    Surface::Lit(
+        LitSurface {
+            alpha,
+            strand,
+            shadow: 0.0,
+            encoded_tangent: encoded.truncate(),
+            wind: v.wind,
+            lean: v.lean,
+            light: v.light,
+            eye: v.eye,
+        },
+        shadow,
+    )
+}
+
+/// Step 6's result for one fragment: the shadow debug view's grey (final), or the fragment
+/// ready for strand lighting with its shadow.
+#[inline(always)]
+fn shadowed(mut lit: LitSurface, shadow: f32, p: &ShadeParams) -> Result<LitSurface, Vec4> {
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
-        return Surface::Finished(Vec4::new(g, g, g, alpha));
+        return Err(Vec4::new(g, g, g, lit.alpha));
     }
-    Surface::Lit(LitSurface {
-        alpha,
-        strand,
-        shadow,
-        encoded_tangent: encoded.truncate(),
-        wind: v.wind,
-        lean: v.lean,
-        light: v.light,
-        eye: v.eye,
-    })
+    lit.shadow = shadow;
+    Ok(lit)
 }
 
 #[cfg(test)]

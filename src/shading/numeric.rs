@@ -41,7 +41,7 @@ pub(crate) fn sanitize_exponent(p: f32) -> f32 {
 /// computed (not flushed). The scalar twin of the lanes: the same IEEE operations in the same
 /// order, so the same bits as each lane of [`pow01_x4`] (and as `pow01` in `src/gpu/fur.wgsl`
 /// where the GPU does not contract to fused multiply-adds).
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
     let x = saturate(base);
     let y = sanitize_exponent(exponent);
@@ -145,7 +145,7 @@ fn log2_scalar(x: f32) -> (f32, f32) {
 /// smaller normal results (measured 6.56; the f32 rounding of the `log2 m` tail, relative
 /// error about 3e-9, is multiplied by `|y·log2 x|`), subnormal results within 4 steps of
 /// `2^-149` (3.33).
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     let x = saturate_x4(f32x4::new(base));
     let log2_x = Log2x4::new(x);
@@ -154,7 +154,7 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
 
 /// [`pow01_x4`] of one base with two exponents, `(base^a, base^b)` lane by lane, the same
 /// bits as two calls: the two powers share the logarithm.
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01_x4_two_exponents(
     base: [f32; 4],
     a: [f32; 4],

@@ -47,7 +47,7 @@ pub fn light_spot_cosine(normal: Vec3, spot_light_dir: Vec3) -> f32 {
 }
 
 /// The lobe of [`light_spot_intensity`] from its cosine: `max(0, cosine)^exponent`.
-#[inline]
+#[inline(always)]
 pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
     pow01(cosine, exponent)
 }
