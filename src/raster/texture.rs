@@ -604,7 +604,7 @@ pub struct NearestLookup<'a> {
 impl NearestLookup<'_> {
     /// [`Sampler::alpha_nearest_in`] at four points `(u[i], v[i])`, the same four values: the
     /// coordinates go through the clamp, the floor and the addressing as packed lanes.
-    #[inline]
+    #[inline(always)]
     pub fn alpha_x4(&self, u: [f32; 4], v: [f32; 4]) -> [f32; 4] {
         let x = self
             .u

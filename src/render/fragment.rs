@@ -14,7 +14,8 @@
 //!
 //! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
-//! steps 1–4 and 6 lane by lane, then steps 5 and 7 on the quad's lit lanes together
+//! steps 1–4 lane by lane, step 6 on the quad's lanes together (lookup `k` of every lane in one
+//! batch, [`shading::shell_shadow_lanes`]), then steps 5 and 7 on the quad's lit lanes together
 //! ([`crate::shading::lanes`]). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
@@ -158,7 +159,7 @@ impl Spot {
 
     /// [`Spot::weight_at`] with the normal already normalised (`normal.normalize_or_zero()`),
     /// as a fragment with several spots and matches computes it once.
-    #[inline]
+    #[inline(always)]
     pub fn weight_at_unit_normal(&self, object: Vec3, unit_normal: Vec3) -> (Vec3, f32) {
         match *self {
             Spot::Ellipsoid {
@@ -217,6 +218,55 @@ impl Spot {
                 colour,
                 shading::stripe_intensity(object.dot(axis), period, width, softness),
             ),
+        }
+    }
+}
+
+impl Spot {
+    /// [`Spot::weight_at_unit_normal`]'s weight for the four lanes of a quad, lane by lane the
+    /// same bits: ellipsoids and light spots on packed lanes (a light spot's power is skipped
+    /// when every lane is surely outside it), stripes lane by lane.
+    #[inline(always)]
+    pub fn weights_x4(&self, object: &Vec3x4, unit_normal: &Vec3x4) -> [f32; shading::LANES] {
+        match *self {
+            Spot::Ellipsoid {
+                centre,
+                radii,
+                inner,
+                ..
+            } => shading::ellipsoid_spot_intensity_x4(object, centre, radii, inner),
+            Spot::Light {
+                exponent,
+                inner_threshold,
+                outer_threshold,
+                outside_below,
+                cosine_direction,
+                ..
+            } => {
+                let cosine = unit_normal.dot(&Vec3x4::splat(cosine_direction));
+                let outside = cosine.map(|c| c < outside_below);
+                if outside.iter().all(|&o| o) {
+                    return [0.0; shading::LANES];
+                }
+                let lobe = shading::light_spot_lobe_x4(cosine, exponent);
+                let weight = shading::spot_gradient_x4(lobe, inner_threshold, outer_threshold);
+                std::array::from_fn(|i| if outside[i] { 0.0 } else { weight[i] })
+            }
+            Spot::LightStripe { .. } | Spot::Stripe { .. } => std::array::from_fn(|i| {
+                self.weight_at_unit_normal(object.lane(i), unit_normal.lane(i))
+                    .1
+            }),
+        }
+    }
+
+    /// The spot's colour.
+    #[inline(always)]
+    pub fn colour(&self) -> Vec3 {
+        match *self {
+            Spot::Ellipsoid { colour, .. }
+            | Spot::Light { colour, .. }
+            | Spot::LightStripe { colour, .. }
+            | Spot::Stripe { colour, .. } => colour,
         }
     }
 }
@@ -499,23 +549,34 @@ pub fn shade_fur(
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let v = f.varyings();
     let reads = LevelReads::new(textures, lod);
-    match surface(
-        v,
-        v.normal.normalize_or_zero(),
-        &reads,
-        textures,
-        maps,
-        layer,
-        p,
-    ) {
+    let unit_normal = v.normal.normalize_or_zero();
+    match surface(v, unit_normal, &reads, textures, maps, layer, p) {
         Surface::Discarded => None,
         Surface::Finished(colour) => Some(colour),
-        Surface::Lit(lit) => {
+        Surface::Lit(mut lit, lookups) => {
+            lit.strand = spotted_strand(lit.strand, v.object, unit_normal, lit.burn, p);
+            let shadow = match lookups {
+                ShadowLookups::Taken(shadow) => shadow,
+                ShadowLookups::Pending { uv, offset } => {
+                    let level = textures.colour.nearest_level(lod);
+                    shading::shell_shadow(
+                        |at| textures.sampler.alpha_nearest_in(level, at),
+                        uv,
+                        offset,
+                        layer.lookups,
+                        p.shadow_texel,
+                    )
+                }
+            };
+            let lit = match shadowed(lit, shadow, p) {
+                Ok(lit) => lit,
+                Err(finished) => return Some(finished),
+            };
             let lighting = shading::strand_lighting(
-                lit.tangent(layer, p),
+                lit.tangent(v, layer, p),
                 Vec3::Z,
-                lit.light.normalize_or_zero(),
-                lit.eye.normalize_or_zero(),
+                v.light.normalize_or_zero(),
+                v.eye.normalize_or_zero(),
                 p.exponents,
                 p.tangents,
                 p.tangent_shift,
@@ -544,19 +605,25 @@ pub fn shade_fur_quad(
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let reads = LevelReads::new(textures, lod);
     let varyings = quad.varyings();
+    let lanes_of =
+        |field: fn(&FurVaryings) -> Vec3| Vec3x4::from_lanes(varyings.each_ref().map(field));
     // The burn lobes and the light spots need each lane's unit normal: four at once.
-    let unit_normals =
-        Vec3x4::from_lanes(varyings.each_ref().map(|v| v.normal)).normalize_or_zero();
+    let unit_normals = lanes_of(|v| v.normal).normalize_or_zero();
     let mut out = [None; 4];
-    let mut lit = [None; 4];
+    // The lanes that reach the spots, the shadow and the lighting, with what they carry. Lanes
+    // outside `lit` hold zeros (uv 0 is a valid texel for the shadow's lookups): every lane
+    // runs the packed steps below, and only the lit lanes' results are kept.
+    let mut lit = 0u32;
+    let mut surfaces = [LitSurface::ZERO; 4];
+    let mut pending = 0u32;
+    let (mut shadow_uv, mut shadow_offset) = ([Vec2::ZERO; 4], [Vec2::ZERO; 4]);
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
             continue;
         }
-        let unit_normal = unit_normals.lane(lane);
         match surface(
             &varyings[lane],
-            unit_normal,
+            unit_normals.lane(lane),
             &reads,
             textures,
             maps,
@@ -565,33 +632,86 @@ pub fn shade_fur_quad(
         ) {
             Surface::Discarded => {}
             Surface::Finished(colour) => out[lane] = Some(colour),
-            Surface::Lit(l) => lit[lane] = Some(l),
+            Surface::Lit(l, lookups) => {
+                lit |= 1 << lane;
+                surfaces[lane] = l;
+                match lookups {
+                    ShadowLookups::Taken(shadow) => surfaces[lane].shadow = shadow,
+                    ShadowLookups::Pending { uv, offset } => {
+                        pending |= 1 << lane;
+                        (shadow_uv[lane], shadow_offset[lane]) = (uv, offset);
+                    }
+                }
+            }
         }
     }
-    let Some(&first) = lit.iter().flatten().next() else {
+    if lit == 0 {
         return out;
+    }
+    // Step 4's spots on the quad's lanes together.
+    if !p.spots.is_empty() {
+        let objects = lanes_of(|v| v.object);
+        let mut strands = Vec3x4::from_lanes(surfaces.map(|l| l.strand));
+        for spot in &p.spots {
+            let weights = spot.weights_x4(&objects, &unit_normals);
+            strands = shading::apply_spot_x4(&strands, spot.colour(), weights);
+        }
+        for (lane, surface) in surfaces.iter_mut().enumerate() {
+            surface.strand = strands.lane(lane);
+        }
+    }
+    // Step 6 for the quad's lanes together: lookup k of every lane in one batch.
+    let shadows = if pending != 0 && layer.lookups > 0 {
+        shading::shell_shadow_lanes(
+            |u, v| reads.shadow.alpha_x4(u, v),
+            shadow_uv,
+            shadow_offset,
+            layer.lookups,
+            p.shadow_texel,
+        )
+    } else {
+        [0.0; 4]
     };
-    // Lanes with nothing to light repeat a lit one: their results are dropped below.
-    let inputs = lit.map(|l| l.unwrap_or(first));
-    let lanes_of = |field: fn(&LitSurface) -> Vec3| Vec3x4::from_lanes(inputs.map(|l| field(&l)));
+    for lane in 0..4 {
+        if lit & (1 << lane) == 0 {
+            continue;
+        }
+        let l = &mut surfaces[lane];
+        l.strand = l.burn.strand_colour(l.strand);
+        let shadow = if pending & (1 << lane) != 0 {
+            shadows[lane]
+        } else {
+            l.shadow
+        };
+        match shadowed(*l, shadow, p) {
+            Ok(shadowed) => *l = shadowed,
+            Err(finished) => {
+                out[lane] = Some(finished);
+                lit &= !(1 << lane);
+            }
+        }
+    }
+    if lit == 0 {
+        return out;
+    }
     let lighting = shading::strand_lighting_x4(
         &lit_tangents_x4(
-            &lanes_of(|l| l.encoded_tangent),
-            &lanes_of(|l| l.wind),
-            &lanes_of(|l| l.lean),
+            &Vec3x4::from_lanes(surfaces.map(|l| l.encoded_tangent)),
+            &lanes_of(|v| v.wind),
+            &lanes_of(|v| v.lean),
             layer,
             p,
         ),
         &Vec3x4::splat(Vec3::Z),
-        &lanes_of(|l| l.light).normalize_or_zero(),
-        &lanes_of(|l| l.eye).normalize_or_zero(),
+        &lanes_of(|v| v.light).normalize_or_zero(),
+        &lanes_of(|v| v.eye).normalize_or_zero(),
         p.exponents,
         p.tangents,
         p.tangent_shift,
     );
     for lane in 0..4 {
-        if let Some(l) = &lit[lane] {
-            out[lane] = Some(l.colour(lighting[lane], p));
+        if lit & (1 << lane) != 0 {
+            out[lane] = Some(surfaces[lane].colour(lighting[lane], p));
         }
     }
     out
@@ -655,22 +775,31 @@ enum Surface {
     Discarded,
     /// A debug view's colour, final.
     Finished(Vec4),
-    /// Ready for strand lighting.
-    Lit(LitSurface),
+    /// Ready for the spots, the shell shadow (its `shadow` still 0) and strand lighting.
+    Lit(LitSurface, ShadowLookups),
 }
 
-/// Everything eq. 3.7 needs of one fragment: the strand lighting's inputs as interpolated or
-/// read (the tangent still encoded, the vectors not normalised), and the rest.
+/// The shell shadow of one fragment (step 6), as [`surface`] leaves it.
+#[derive(Clone, Copy)]
+enum ShadowLookups {
+    /// Already summed (the density bands' lookups, one fragment at a time).
+    Taken(f32),
+    /// Lookups of the layer's shadow level still to take, from `uv` along `offset`
+    /// ([`shading::shell_shadow`]); the quad stage takes its lanes' together.
+    Pending { uv: Vec2, offset: Vec2 },
+}
+
+/// What eq. 3.7 needs of one fragment besides its varyings (the wind, lean, light and eye
+/// vectors are read from those): the tangent still encoded, the colour, alpha and shadow.
 #[derive(Clone, Copy)]
 struct LitSurface {
     alpha: f32,
+    /// The strand colour: after [`surface`], the texel's (tinted); then spots and the burn's
+    /// charring ([`spotted_strand`], [`Spot::weights_x4`]).
     strand: Vec3,
+    burn: BurnOutcome,
     shadow: f32,
     encoded_tangent: Vec3,
-    wind: Vec3,
-    lean: Vec3,
-    light: Vec3,
-    eye: Vec3,
 }
 
 /// Step 5: the strand tangent decoded from its texel, bent by a fraction of the wind that
@@ -729,10 +858,19 @@ fn lit_tangents_x4(
 }
 
 impl LitSurface {
-    /// [`lit_tangent`] of this fragment.
+    /// A lane with nothing to light.
+    const ZERO: LitSurface = LitSurface {
+        alpha: 0.0,
+        strand: Vec3::ZERO,
+        burn: BurnOutcome::Unburnt,
+        shadow: 0.0,
+        encoded_tangent: Vec3::ZERO,
+    };
+
+    /// [`lit_tangent`] of this fragment with varyings `v`.
     #[inline(always)]
-    fn tangent(&self, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
-        lit_tangent(self.encoded_tangent, self.wind, self.lean, layer, p)
+    fn tangent(&self, v: &FurVaryings, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
+        lit_tangent(self.encoded_tangent, v.wind, v.lean, layer, p)
     }
 
     /// The dampened specular (3.2.3) and eq. 3.7, with this fragment's alpha.
@@ -775,8 +913,8 @@ impl<'a> LevelReads<'a> {
     }
 }
 
-/// Steps 1–6 of the module's list for one fragment at the level of detail of `reads`:
-/// everything up to the strand lighting. `unit_normal` is `v.normal.normalize_or_zero()`,
+/// Steps 1–4 of the module's list for one fragment at the level of detail of `reads` but the
+/// spots and charring ([`spotted_strand`]), and where its shell shadow (step 6) looks. `unit_normal` is `v.normal.normalize_or_zero()`,
 /// which the burn lobes and the light spots share.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the fragment, what its quad shares, and the layer's state
@@ -836,11 +974,6 @@ fn surface(
     if let Some(tint) = &maps.colour {
         strand = shading::tint_strand(strand, maps.sample(tint, v.mesh_uv).truncate());
     }
-    for spot in &p.spots {
-        let (colour, weight) = spot.weight_at_unit_normal(v.object, unit_normal);
-        strand = shading::apply_spot(strand, colour, weight);
-    }
-    let strand = burn.strand_colour(strand);
     // The thesis checks "if the according pixel is transparent": one texel per lookup. Wind
     // moves the fur above this layer further, so its displacement adds to the lookup (3.3.1).
     // The level is chosen once for all lookups of this fragment.
@@ -848,36 +981,56 @@ fn surface(
     let shadow = match (density, textures.density) {
         (Some(d), Some(bands)) => {
             let level = bands.nearest_level(lod);
-            shading::shell_shadow(
+            ShadowLookups::Taken(shading::shell_shadow(
                 |at| shading::density_alpha(sampler.sample_nearest_in(level, at), d),
                 uv,
                 offset,
                 layer.lookups,
                 p.shadow_texel,
-            )
+            ))
         }
-        _ => shading::shell_shadow_x4(
-            |u, v| reads.shadow.alpha_x4(u, v),
-            uv,
-            offset,
-            layer.lookups,
-            p.shadow_texel,
-        ),
+        _ => ShadowLookups::Pending { uv, offset },
     };
+    Surface::Lit(
+        LitSurface {
+            alpha,
+            strand,
+            burn,
+            shadow: 0.0,
+            encoded_tangent: encoded.truncate(),
+        },
+        shadow,
+    )
+}
+
+/// Step 4's spots, then the charring by `1 − I`, on one fragment's strand colour: the scalar
+/// statement of what [`shade_fur_quad`] does with [`Spot::weights_x4`].
+#[inline(always)]
+fn spotted_strand(
+    strand: Vec3,
+    object: Vec3,
+    unit_normal: Vec3,
+    burn: BurnOutcome,
+    p: &ShadeParams,
+) -> Vec3 {
+    let mut strand = strand;
+    for spot in &p.spots {
+        let (colour, weight) = spot.weight_at_unit_normal(object, unit_normal);
+        strand = shading::apply_spot(strand, colour, weight);
+    }
+    burn.strand_colour(strand)
+}
+
+/// Step 6's result for one fragment: the shadow debug view's grey (final), or the fragment
+/// ready for strand lighting with its shadow.
+#[inline(always)]
+fn shadowed(mut lit: LitSurface, shadow: f32, p: &ShadeParams) -> Result<LitSurface, Vec4> {
     if p.debug_view == DebugView::Shadow {
         let g = (1.0 - p.weights.shadow * shadow).clamp(0.0, 1.0);
-        return Surface::Finished(Vec4::new(g, g, g, alpha));
+        return Err(Vec4::new(g, g, g, lit.alpha));
     }
-    Surface::Lit(LitSurface {
-        alpha,
-        strand,
-        shadow,
-        encoded_tangent: encoded.truncate(),
-        wind: v.wind,
-        lean: v.lean,
-        light: v.light,
-        eye: v.eye,
-    })
+    lit.shadow = shadow;
+    Ok(lit)
 }
 
 #[cfg(test)]

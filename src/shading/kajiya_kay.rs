@@ -129,7 +129,7 @@ pub fn strand_lighting(
 /// it: the bases are computed on the four lanes at once ([`Vec3x4`], the same operations per
 /// lane), and each power is taken by lanes of four of the same exponent, three (one tangent)
 /// or five (three tangents) batches for the whole quad instead of four or eight.
-#[inline]
+#[inline(always)]
 pub fn strand_lighting_x4(
     tangent: &Vec3x4,
     normal: &Vec3x4,

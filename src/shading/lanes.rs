@@ -56,13 +56,13 @@ impl Vec3x4 {
 
     /// The components as packed registers.
     #[inline(always)]
-    fn packed(&self) -> [f32x4; 3] {
+    pub(crate) fn packed(&self) -> [f32x4; 3] {
         [self.x, self.y, self.z].map(f32x4::new)
     }
 
     /// From packed components.
     #[inline(always)]
-    fn from_packed([x, y, z]: [f32x4; 3]) -> Self {
+    pub(crate) fn from_packed([x, y, z]: [f32x4; 3]) -> Self {
         Vec3x4 {
             x: x.to_array(),
             y: y.to_array(),

@@ -118,12 +118,14 @@ pub use motion::{
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
 pub use shadow::{
     SHADOW_MIN_COS, SHADOW_OPAQUE_ALPHA, ShadowTexel, shadow_change, shadow_lookup_count,
-    shadow_of_alpha, shadow_of_opaque, shadow_texel, shell_shadow, shell_shadow_x4,
+    shadow_of_alpha, shadow_of_opaque, shadow_texel, shell_shadow, shell_shadow_lanes,
+    shell_shadow_x4,
 };
 pub use spots::{
-    apply_spot, apply_spots, ellipsoid_spot_intensity, light_spot_cosine, light_spot_cosine_below,
-    light_spot_intensity, light_spot_lobe, light_stripe_band, light_stripe_intensity,
-    spot_gradient, stripe_intensity,
+    apply_spot, apply_spot_x4, apply_spots, ellipsoid_spot_intensity, ellipsoid_spot_intensity_x4,
+    light_spot_cosine, light_spot_cosine_below, light_spot_intensity, light_spot_lobe,
+    light_spot_lobe_x4, light_stripe_band, light_stripe_intensity, spot_gradient, spot_gradient_x4,
+    stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

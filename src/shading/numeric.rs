@@ -41,7 +41,7 @@ pub(crate) fn sanitize_exponent(p: f32) -> f32 {
 /// computed (not flushed). The scalar twin of the lanes: the same IEEE operations in the same
 /// order, so the same bits as each lane of [`pow01_x4`] (and as `pow01` in `src/gpu/fur.wgsl`
 /// where the GPU does not contract to fused multiply-adds).
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
     let x = saturate(base);
     let y = sanitize_exponent(exponent);
@@ -145,7 +145,7 @@ fn log2_scalar(x: f32) -> (f32, f32) {
 /// smaller normal results (measured 6.56; the f32 rounding of the `log2 m` tail, relative
 /// error about 3e-9, is multiplied by `|y·log2 x|`), subnormal results within 4 steps of
 /// `2^-149` (3.33).
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     let x = saturate_x4(f32x4::new(base));
     let log2_x = Log2x4::new(x);
@@ -154,7 +154,7 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
 
 /// [`pow01_x4`] of one base with two exponents, `(base^a, base^b)` lane by lane, the same
 /// bits as two calls: the two powers share the logarithm.
-#[inline]
+#[inline(always)]
 pub(crate) fn pow01_x4_two_exponents(
     base: [f32; 4],
     a: [f32; 4],
@@ -299,6 +299,19 @@ pub(crate) fn ramp(x: f32, lo: f32, hi: f32) -> f32 {
     } else {
         smoothstep01((x - lo) / (hi - lo))
     }
+}
+
+/// [`ramp`] of four lanes, the same bits: every branch computed, the scalar's first taken
+/// branch selected (`x ≥ hi` → 1, then `x ≤ lo` → 0, else the smoothstep; NaN compares false
+/// and its smoothstep saturates to +0, the scalar's 0).
+#[inline(always)]
+pub(crate) fn ramp_x4(x: f32x4, lo: f32, hi: f32) -> f32x4 {
+    let (lo, hi) = (f32x4::splat(lo), f32x4::splat(hi));
+    // `smoothstep01`: `t·t·(3 − 2t)` of the saturated ring coordinate.
+    let t = saturate_x4((x - lo) / (hi - lo));
+    let smooth = t * t * (f32x4::splat(3.0) - f32x4::splat(2.0) * t);
+    let below = x.simd_le(lo).select(f32x4::ZERO, smooth);
+    x.simd_ge(hi).select(f32x4::ONE, below)
 }
 
 #[cfg(test)]
@@ -604,6 +617,45 @@ mod tests {
              subnormal steps",
             worst[0], worst[1], worst[2]
         );
+    }
+
+    #[test]
+    fn ramp_of_four_lanes_is_the_scalar_ramp_bit_for_bit() {
+        let mut rng = crate::shading::test_support::Lcg::new(29);
+        let specials = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            0.1,
+            0.9,
+        ];
+        for k in 0..20_000usize {
+            let (lo, hi) = if k % 5 == 0 {
+                (0.5, 0.5)
+            } else if k % 7 == 0 {
+                (0.9, 0.1)
+            } else {
+                (rng.range(-1.0, 0.5), rng.range(0.5, 2.0))
+            };
+            let x: [f32; 4] = std::array::from_fn(|i| {
+                if (k + i) % 13 == 0 {
+                    specials[(k + i) % specials.len()]
+                } else {
+                    rng.range(-1.5, 2.5)
+                }
+            });
+            let got = ramp_x4(f32x4::new(x), lo, hi).to_array();
+            for i in 0..4 {
+                assert_eq!(
+                    got[i].to_bits(),
+                    ramp(x[i], lo, hi).to_bits(),
+                    "{} {lo} {hi}",
+                    x[i]
+                );
+            }
+        }
     }
 
     #[test]

@@ -181,6 +181,49 @@ pub fn shell_shadow_x4(
     shadow
 }
 
+/// [`shell_shadow`] of the four fragments of a quad (one layer, so one lookup count `m`),
+/// lookup `k` of every lane in one batch: `sample_alpha_x4` gets the u and v of lookup `k` of
+/// the four lanes and returns their alphas. Lane by lane the same points and the same sum in
+/// the same order (`0 + s₁ + s₂ + … + s_m`), so the same bits as [`shell_shadow`] on each lane.
+///
+/// Why by lookup rather than by fragment ([`shell_shadow_x4`]): every lane of a quad has the
+/// same `m`, so `m` batches serve the whole quad with no padding, where four lookups a batch
+/// per fragment pad `m` to a multiple of four (8 batches for `m = 6` on a full quad, 4 for
+/// `m = 1`, against 6 and 1 here). The fraction `k/m` is computed once per batch for all lanes.
+/// Lanes the caller does not need still run (give them any finite point; their sums are
+/// dropped).
+#[inline(always)]
+pub fn shell_shadow_lanes(
+    mut sample_alpha_x4: impl FnMut([f32; 4], [f32; 4]) -> [f32; 4],
+    uv: [Vec2; 4],
+    shadow_lookup: [Vec2; 4],
+    lookups: u32,
+    texel: ShadowTexel,
+) -> [f32; 4] {
+    // `finite_or_zero` of each component, as `LookupPath::new`.
+    let finite = |x: [f32; 4]| {
+        let x = f32x4::new(x);
+        x.is_finite().select(x, f32x4::ZERO)
+    };
+    let (u0, v0) = (finite(uv.map(|p| p.x)), finite(uv.map(|p| p.y)));
+    let (du, dv) = (
+        finite(shadow_lookup.map(|p| p.x)),
+        finite(shadow_lookup.map(|p| p.y)),
+    );
+    let m = lookups as f32;
+    let mut shadow = f32x4::ZERO;
+    for k in 1..=lookups {
+        // `LookupPath::point`: `uv + step·(k/m)`, per component.
+        let fraction = f32x4::splat(k as f32 / m);
+        let (u, v) = (
+            (u0 + du * fraction).to_array(),
+            (v0 + dv * fraction).to_array(),
+        );
+        shadow += shadow_texel_x4(f32x4::new(sample_alpha_x4(u, v)), texel);
+    }
+    shadow.to_array()
+}
+
 /// Light directions closer to the surface than this cosine are treated as this cosine by
 /// [`shadow_change`] (about 75.5° from the normal).
 pub const SHADOW_MIN_COS: f32 = 0.25;
@@ -313,6 +356,51 @@ mod tests {
                     )
                     .to_bits(),
                     shell_shadow(alpha, uv, Vec2::X, 5, texel).to_bits()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn quad_lanes_at_once_are_the_scalar_sums_bit_for_bit() {
+        let mut rng = Lcg::new(6);
+        let alpha = |p: Vec2| {
+            let a = (p.x * 12.9898 + p.y * 78.233).sin() * 1.7;
+            if a > 1.5 { f32::NAN } else { a }
+        };
+        let specials = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1e30];
+        for k in 0..3000u32 {
+            let mut point = |scale: f32| {
+                let mut p = Vec2::new(rng.range(-scale, scale), rng.range(-scale, scale));
+                if k % 11 == 0 {
+                    p.x = specials[(k / 11) as usize % specials.len()];
+                }
+                p
+            };
+            let uv: [Vec2; 4] = std::array::from_fn(|_| point(3.0));
+            let offset: [Vec2; 4] = std::array::from_fn(|_| point(0.5));
+            let lookups = k % 14;
+            let texel = [ShadowTexel::Alpha, ShadowTexel::Opaque][k as usize % 2];
+            let mut batches = 0;
+            let lanes = shell_shadow_lanes(
+                |u, v| {
+                    batches += 1;
+                    std::array::from_fn(|i| alpha(Vec2::new(u[i], v[i])))
+                },
+                uv,
+                offset,
+                lookups,
+                texel,
+            );
+            // One batch per lookup, none padded.
+            assert_eq!(batches, lookups);
+            for i in 0..4 {
+                assert_eq!(
+                    lanes[i].to_bits(),
+                    shell_shadow(alpha, uv[i], offset[i], lookups, texel).to_bits(),
+                    "lane {i}: {} {} {lookups}",
+                    uv[i],
+                    offset[i]
                 );
             }
         }

@@ -6,8 +6,10 @@
 //! coordinate `t` (0 at the outer edge, 1 at the inner edge), so the colour has no visible
 //! crease (Mach band) at either edge.
 
-use super::numeric::{finite_or_zero, pow01, ramp, saturate};
+use super::lanes::{LANES, Vec3x4};
+use super::numeric::{finite_or_zero, pow01, pow01_x4, ramp, ramp_x4, saturate, saturate_x4};
 use glam::Vec3;
+use wide::f32x4;
 
 /// Geometric spot (thesis 3.2.4, "an ellipsoid function"): with the ellipsoid distance
 /// `d = sqrt(Σ((p − c)/r)²)`, the weight is 1 for `d ≤ inner`, 0 for `d ≥ 1`, and
@@ -24,6 +26,54 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
     }
     let d = ((point - centre) / r).length();
     ramp(-d, -1.0, -saturate(inner))
+}
+
+/// [`ellipsoid_spot_intensity`] of four points (the lanes of a quad), lane by lane the same
+/// bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square root on packed
+/// lanes, and [`ramp`]'s branches as selects.
+#[inline(always)]
+pub fn ellipsoid_spot_intensity_x4(
+    point: &Vec3x4,
+    centre: Vec3,
+    radii: Vec3,
+    inner: f32,
+) -> [f32; LANES] {
+    let r = radii.abs();
+    if !(r.x > 0.0 && r.y > 0.0 && r.z > 0.0) {
+        return [0.0; LANES];
+    }
+    let [x, y, z] = point.packed();
+    let [cx, cy, cz, rx, ry, rz] = [centre.x, centre.y, centre.z, r.x, r.y, r.z].map(f32x4::splat);
+    let (dx, dy, dz) = ((x - cx) / rx, (y - cy) / ry, (z - cz) / rz);
+    let d = ((dx * dx + dy * dy) + dz * dz).sqrt();
+    ramp_x4(-d, -1.0, -saturate(inner)).to_array()
+}
+
+/// [`light_spot_lobe`] of four cosines, lane by lane the same bits ([`pow01_x4`]).
+#[inline(always)]
+pub fn light_spot_lobe_x4(cosine: [f32; LANES], exponent: f32) -> [f32; LANES] {
+    pow01_x4(cosine, [exponent; LANES])
+}
+
+/// [`spot_gradient`] of four intensities, lane by lane the same bits.
+#[inline(always)]
+pub fn spot_gradient_x4(
+    intensity: [f32; LANES],
+    inner_threshold: f32,
+    outer_threshold: f32,
+) -> [f32; LANES] {
+    ramp_x4(f32x4::new(intensity), outer_threshold, inner_threshold).to_array()
+}
+
+/// [`apply_spot`] on four lanes with one spot colour, lane by lane the same bits:
+/// `fur·(1 − w) + spot·w` per component with `w = saturate(weight)`.
+#[inline(always)]
+pub fn apply_spot_x4(fur_colour: &Vec3x4, spot_colour: Vec3, weight: [f32; LANES]) -> Vec3x4 {
+    let w = saturate_x4(f32x4::new(weight));
+    let keep = f32x4::ONE - w;
+    let fur = fur_colour.packed();
+    let spot = spot_colour.to_array().map(f32x4::splat);
+    Vec3x4::from_packed(std::array::from_fn(|c| fur[c] * keep + spot[c] * w))
 }
 
 /// Light-based spot lobe (thesis 3.2.4: "we use the specular value to add spots", the light
@@ -47,7 +97,7 @@ pub fn light_spot_cosine(normal: Vec3, spot_light_dir: Vec3) -> f32 {
 }
 
 /// The lobe of [`light_spot_intensity`] from its cosine: `max(0, cosine)^exponent`.
-#[inline]
+#[inline(always)]
 pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
     pow01(cosine, exponent)
 }
@@ -163,6 +213,58 @@ pub fn light_stripe_intensity(
 mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
+
+    #[test]
+    fn four_lanes_are_the_scalar_spot_terms_bit_for_bit() {
+        let mut rng = Lcg::new(52);
+        let lanes = |rng: &mut Lcg, k: usize| crate::shading::lanes::tests::lanes(rng, k);
+        for k in 0..5000usize {
+            let points = lanes(&mut rng, k);
+            let colours = lanes(&mut rng, k + 2);
+            let centre = rng.cube() * 2.0;
+            let radii = if k % 17 == 0 {
+                Vec3::new(0.0, 1.0, 1.0)
+            } else {
+                rng.cube() * 3.0
+            };
+            let inner = [rng.unit(), f32::NAN, 1.0, -0.5][k % 4];
+            let got =
+                ellipsoid_spot_intensity_x4(&Vec3x4::from_lanes(points), centre, radii, inner);
+            let cosine: [f32; 4] = std::array::from_fn(|_| rng.range(-1.2, 1.2));
+            let exponent = [40.0, 1.0, 0.0, f32::NAN, 7.5][k % 5];
+            let lobe = light_spot_lobe_x4(cosine, exponent);
+            let (inner_t, outer_t) = [(0.7, 0.3), (0.3, 0.7), (0.5, 0.5)][k % 3];
+            let gradient = spot_gradient_x4(lobe, inner_t, outer_t);
+            let weight: [f32; 4] =
+                std::array::from_fn(|i| [rng.range(-0.5, 1.5), f32::NAN, 0.0, 1.0][(k + i) % 4]);
+            let spot = rng.cube();
+            let blended = apply_spot_x4(&Vec3x4::from_lanes(colours), spot, weight);
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            for i in 0..4 {
+                assert_eq!(
+                    got[i].to_bits(),
+                    ellipsoid_spot_intensity(points[i], centre, radii, inner).to_bits(),
+                    "ellipsoid {:?}",
+                    points[i]
+                );
+                assert_eq!(
+                    lobe[i].to_bits(),
+                    light_spot_lobe(cosine[i], exponent).to_bits()
+                );
+                assert_eq!(
+                    gradient[i].to_bits(),
+                    spot_gradient(lobe[i], inner_t, outer_t).to_bits()
+                );
+                assert_eq!(
+                    bits(blended.lane(i)),
+                    bits(apply_spot(colours[i], spot, weight[i])),
+                    "apply {:?} {}",
+                    colours[i],
+                    weight[i]
+                );
+            }
+        }
+    }
 
     fn smooth64(t: f64) -> f64 {
         let t = t.clamp(0.0, 1.0);
