@@ -188,7 +188,7 @@ fn rightmost_fur_column(image: &pelage::render::RenderedImage) -> Option<u32> {
 }
 
 #[test]
-fn wind_and_gravity_move_a_single_strand_once() {
+fn wind_gravity_motion_and_combing_move_a_single_strand_once() {
     // Thesis 3.3: the vertices move only back along −normal, the sideways motion is the texture
     // lookup. Applied twice (vertices and texture), the top layer moved twice the model's
     // displacement.
@@ -200,7 +200,15 @@ fn wind_and_gravity_move_a_single_strand_once() {
     // still lags on the spring, with the strand's root where it was at rest.
     let motion = "time = 1.1\n[motion]\npath = [[0.0, 0.0, 0.0, 0.0], [0.5, -1.0, 0.0, 0.0], \
                   [1.0, 0.0, 0.0, 0.0]]\nfrequency = 1.5\ndamping = 0.2\nresponse = 1.0\n";
-    for bend in [wind, gravity, motion] {
+    // Combing: a uniform direction map whose red leans the fur along u (+x on the plane) and
+    // whose green (128, as near the middle as 8 bits go) leans it a hair along v, which does
+    // not move the footprint's right edge.
+    let comb_red = 191u8;
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([comb_red, 128, 0, 255]))
+        .save(dir.join("comb.png"))
+        .expect("write the direction map");
+    let comb = "[maps]\ndirection = \"comb.png\"\n";
+    for bend in [wind, gravity, motion, comb] {
         // A seed whose strand lies well inside the plane, so no part of it wraps over the tile.
         let found = (1..64).find_map(|seed| {
             let still = one_strand_scene(&dir, seed, "");
@@ -214,7 +222,8 @@ fn wind_and_gravity_move_a_single_strand_once() {
         let moved = prepared.render(64).expect("renders");
         let moved_right = rightmost_fur_column(&moved).expect("fur drawn");
         // The model: the top layer (i = N − 1) at height h = (N − 1)/N · model_difference moves
-        // sideways by bend · h, the bend being the wind's force or the gravity's strength.
+        // sideways by bend · h, the bend being the wind's force, the gravity's strength, the
+        // spring's lag or the combing lean.
         let n = scene.fur.number_of_shells as f32;
         let h = (n - 1.0) / n * scene.fur.model_difference;
         let bend_sine = match (&scene.wind, &scene.gravity, &scene.motion) {
@@ -226,8 +235,13 @@ fn wind_and_gravity_move_a_single_strand_once() {
                 assert!(lag.x > 0.05 && lag.x < 1.0, "the lag leans right: {lag}");
                 lag.x
             }
+            // The map's red r decodes to a lean of r/255 · 2 − 1 along u (0.498 for 191).
+            (None, None, None) if scene.maps.direction.is_some() => {
+                f32::from(comb_red) / 255.0 * 2.0 - 1.0
+            }
             _ => 0.0,
         };
+        assert!(bend_sine > 0.1, "{bend}: the model leans the strand right");
         let sideways = bend_sine * h;
         // The layer sits at height √(h² − sideways²) after the pull; seen from 100 units above
         // with a 2.8° field of view over 256 pixels.
