@@ -188,7 +188,9 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
     let res = u64::from(f.texture_resolution);
     let side = res * u64::from(f.supersample);
     let threads = u64::from(work.threads.max(1));
-    let fin_strands = u64::from(crate::fur::FurParams::default().fin_strands);
+    // The fin strip fitted to the shells holds at most as many strands as the tile
+    // (`fur::bake_fin_for_shells`).
+    let fin_strands = strands;
     let segments = u64::from(f.strand_resolution);
     let kept_frames = if work.keep_frames {
         u64::from(work.frames)
@@ -295,8 +297,10 @@ pub fn bake_work(scene: &Scene) -> u64 {
     let per_layer_segments = (segments / shells).max(1.0);
     let writes = shells * side * side * coverage * per_layer_segments;
     let tests = shells * strands * segments;
-    // The fin: one side view of taller strands, about as much as one layer.
-    let fin = side * side * coverage + strands * segments;
+    // The fin: a side view of taller strands, about as much as one layer, baked once per round
+    // of its fit to the shells and once more (`fur::bake_fin_for_shells`); the fitted strip
+    // holds at most the tile's strands.
+    let fin = 4.0 * (side * side * coverage + strands * segments);
     let total = writes + tests + fin;
     if total.is_finite() && total < u64::MAX as f64 {
         total as u64

@@ -2,7 +2,8 @@
 //!
 //! The data path: [`FurParams`] → [`generate_strands`] (MT19937 from an explicit seed, one block
 //! of draws per strand) → cones around each sampled Bézier segment → [`bake_shells`] (one
-//! texture pair per shell layer, periodic tile) and [`bake_fin`] (a side view of a narrow strip).
+//! texture pair per shell layer, periodic tile) and [`bake_fin`] (a side view of a narrow strip;
+//! [`bake_fin_for_shells`] fits the strip's strand count and radii to the baked shells first).
 //! [`draw_diagram`] draws the thesis's strand figures 3.2–3.7 from this same code.
 //!
 //! Units: the shell tile is the periodic unit square `x, y ∈ [0, 1)`; heights and radii are in
@@ -46,7 +47,10 @@ pub use diagram::{
     DIAGRAM_HEIGHT, DIAGRAM_SHELLS, DIAGRAM_WIDTH, DiagramOptions, Figure, MAX_DIAGRAM_RESOLUTION,
     draw_diagram,
 };
-pub use fin::{FinTexture, bake_fin, bake_fin_strands};
+pub use fin::{
+    FIN_FIT_HEIGHTS, FinFit, FinTexture, RunStats, bake_fin, bake_fin_for_shells, bake_fin_strands,
+    fin_run_stats, shell_run_stats,
+};
 pub use image::{
     EMPTY_COLOUR, EMPTY_TANGENT, Rgba8Image, tangent_from_rgb8, tangent_to_rgb8, unorm8,
 };

@@ -464,7 +464,7 @@ impl PreparedScene {
             .map(|i| mesh::shells::shell_offset(i, n, scene.fur.fur_length(), spacing))
             .collect();
         let (fin, fin_height) = if scene.fur.fins {
-            let baked_fin = fur::bake_fin(&params, scene.seed)?;
+            let (baked_fin, _) = fur::bake_fin_for_shells(&params, scene.seed, &baked)?;
             let height =
                 scene.fur.fur_length() * baked_fin.max_height / baked.max_height.max(f32::EPSILON);
             (
@@ -1068,6 +1068,11 @@ impl PreparedScene {
     /// Height of the fins above the skin, world units.
     pub fn fin_height(&self) -> f32 {
         self.fin_height
+    }
+
+    /// The fur parameters the shells and fins were baked with (tile units).
+    pub fn fur_params(&self) -> FurParams {
+        fur_params(&self.scene, self.tile_world_size)
     }
 
     /// Mean world size of one fur tile along u and v.
