@@ -709,9 +709,21 @@ pub fn shade_fur_quad(
         p.tangents,
         p.tangent_shift,
     );
+    // The dampened specular and eq. 3.7 on the four lanes.
+    let colours = shading::final_colour_x4(
+        &Vec3x4::from_lanes(surfaces.map(|l| l.strand)),
+        p.light_colour,
+        p.ambient,
+        lighting.map(|l| l.diffuse),
+        lighting.map(|l| l.specular),
+        shading::dampened_specular_x4(lighting.map(|l| l.specular_to_dampen)),
+        surfaces.map(|l| l.shadow),
+        &p.weights,
+        p.ambient_term,
+    );
     for lane in 0..4 {
         if lit & (1 << lane) != 0 {
-            out[lane] = Some(surfaces[lane].colour(lighting[lane], p));
+            out[lane] = Some(colours.lane(lane).extend(surfaces[lane].alpha));
         }
     }
     out

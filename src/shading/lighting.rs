@@ -1,6 +1,7 @@
 //! The lighting combination of thesis 3.2.3: dampened specular and the final colour, eq. 3.7,
 //! with one user weight per term.
 
+use super::lanes::{LANES, Vec3x4};
 use super::numeric::saturate_x4;
 use glam::Vec3;
 use wide::f32x4;
@@ -25,6 +26,19 @@ pub fn dampened_specular(s: f32) -> f32 {
     } else {
         0.0
     }
+}
+
+/// [`dampened_specular`] of four lanes, the same bits (the branches as selects; NaN compares
+/// false and gives 0).
+#[inline(always)]
+pub fn dampened_specular_x4(s: [f32; LANES]) -> [f32; LANES] {
+    let s = f32x4::new(s);
+    let ramp = s
+        .simd_gt(f32x4::ZERO)
+        .select(f32x4::splat(0.5) * s, f32x4::ZERO);
+    s.simd_gt(f32x4::splat(DAMPENING_THRESHOLD))
+        .select(f32x4::splat(DAMPENED_SPECULAR_MAX), ramp)
+        .to_array()
 }
 
 /// The user weights of eq. 3.7 (thesis 3.2.3: "we multiply each of these by a user defined
@@ -142,6 +156,41 @@ pub fn final_colour(
     let sum = a + s * l * splat(lit) + l * splat(highlight) - splat(dark);
     let [x, y, z, _] = saturate_x4(sum).to_array();
     Vec3::new(x, y, z)
+}
+
+/// [`final_colour`] (eq. 3.7) of four fragments (the lanes of a quad): per lane and channel the
+/// same operations in the same order, so the same bits, with each channel of the four lanes
+/// as one packed register instead of the three channels of one fragment.
+#[allow(clippy::too_many_arguments)] // one argument per term of eq. 3.7, in its order
+#[inline(always)]
+pub fn final_colour_x4(
+    strand_colour: &Vec3x4,
+    light_colour: Vec3,
+    ambient: f32,
+    diffuse: [f32; LANES],
+    specular: [f32; LANES],
+    dampened: [f32; LANES],
+    shadow: [f32; LANES],
+    weights: &ShadingWeights,
+    term: AmbientTerm,
+) -> Vec3x4 {
+    let splat = f32x4::splat;
+    let lit = splat(weights.diffuse) * f32x4::new(diffuse)
+        + splat(weights.specular) * f32x4::new(specular);
+    let highlight = splat(weights.dampened) * f32x4::new(dampened);
+    let dark = splat(weights.shadow) * f32x4::new(shadow);
+    let level = weights.ambient * ambient;
+    let strand = strand_colour.packed();
+    let light = light_colour.to_array();
+    Vec3x4::from_packed(std::array::from_fn(|c| {
+        let (s, l) = (strand[c], splat(light[c]));
+        // `ambient_term`: the level alone, or the strand times it.
+        let a = match term {
+            AmbientTerm::Constant => splat(level),
+            AmbientTerm::Strand => s * splat(level),
+        };
+        saturate_x4(a + s * l * lit + l * highlight - dark)
+    }))
 }
 
 #[cfg(test)]
@@ -270,6 +319,75 @@ mod tests {
                 expected.to_array().map(f32::to_bits),
                 "{v:?}"
             );
+        }
+    }
+
+    #[test]
+    fn four_lanes_are_the_scalar_eq_3_7_bit_for_bit() {
+        let mut rng = Lcg::new(23);
+        let specials = [0.0, -0.0, 0.6, 1.0, -1.0, 3e38, f32::NAN, f32::INFINITY];
+        let mut pick = |k: usize| {
+            if k.is_multiple_of(7) {
+                specials[(k / 7) % specials.len()]
+            } else {
+                rng.range(-0.5, 1.5)
+            }
+        };
+        for k in 0..5000usize {
+            let lanes: [f32; 4] = std::array::from_fn(|i| pick(k * 40 + i));
+            let got = dampened_specular_x4(lanes);
+            for i in 0..4 {
+                assert_eq!(got[i].to_bits(), dampened_specular(lanes[i]).to_bits());
+            }
+            let strand: [Vec3; 4] = std::array::from_fn(|i| {
+                Vec3::new(
+                    pick(k * 40 + 4 + i),
+                    pick(k * 40 + 8 + i),
+                    pick(k * 40 + 12 + i),
+                )
+            });
+            let term: [[f32; 4]; 4] =
+                std::array::from_fn(|t| std::array::from_fn(|i| pick(k * 40 + 16 + 4 * t + i)));
+            let light = Vec3::new(pick(k * 40 + 32), pick(k * 40 + 33), pick(k * 40 + 34));
+            let ambient = pick(k * 40 + 35);
+            let w = ShadingWeights {
+                ambient: pick(k * 40 + 36),
+                diffuse: pick(k * 40 + 37),
+                specular: pick(k * 40 + 38),
+                dampened: pick(k * 40 + 39),
+                shadow: [0.08, 1.0, -0.5][k % 3],
+            };
+            let ambient_term = [AmbientTerm::Strand, AmbientTerm::Constant][k % 2];
+            let got = final_colour_x4(
+                &Vec3x4::from_lanes(strand),
+                light,
+                ambient,
+                term[0],
+                term[1],
+                term[2],
+                term[3],
+                &w,
+                ambient_term,
+            );
+            for i in 0..4 {
+                let expected = final_colour(
+                    strand[i],
+                    light,
+                    ambient,
+                    term[0][i],
+                    term[1][i],
+                    term[2][i],
+                    term[3][i],
+                    &w,
+                    ambient_term,
+                );
+                assert_eq!(
+                    got.lane(i).to_array().map(f32::to_bits),
+                    expected.to_array().map(f32::to_bits),
+                    "lane {i}: {:?}",
+                    strand[i]
+                );
+            }
         }
     }
 

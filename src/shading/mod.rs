@@ -103,7 +103,8 @@ pub use kajiya_kay::{
 pub use lanes::{LANES, Vec3x4};
 pub use lighting::{
     AmbientTerm, DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
-    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, final_colour,
+    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, dampened_specular_x4,
+    final_colour, final_colour_x4,
 };
 pub use lod::{
     lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,

@@ -154,7 +154,9 @@ impl LookupPath {
 
 /// [`shell_shadow`] with the lookups sampled four at a time (`sample_alpha_x4` gets the u and
 /// v of four points and returns their alphas): the same points, and the same sum in the same
-/// order, so the same bits. Lanes past the last lookup repeat it and add +0 (no change).
+/// order, so the same bits. Lanes past the last lookup repeat it and add +0 (no change). The
+/// quad stage does not pad like this: it takes lookup `k` of its four fragments together
+/// ([`shell_shadow_lanes`]).
 #[inline]
 pub fn shell_shadow_x4(
     mut sample_alpha_x4: impl FnMut([f32; 4], [f32; 4]) -> [f32; 4],
