@@ -200,7 +200,7 @@ mod tests {
         let two = part("two", 1, 2, &[1, 3]);
         assert!(check_shards(&[one.clone(), two.clone()]).is_ok());
         let err = |s: &[(String, Manifest, Vec<usize>)]| check_shards(s).unwrap_err().0;
-        assert!(err(&[one.clone()]).contains("shard 2/2 is missing"));
+        assert!(err(std::slice::from_ref(&one)).contains("shard 2/2 is missing"));
         assert!(err(&[one.clone(), part("other", 9, 2, &[1, 3])]).contains("different sweeps"));
         assert!(err(&[one.clone(), one.clone()]).contains("both shard 1/2"));
         assert!(err(&[one.clone(), part("two", 1, 2, &[1])]).contains("incomplete"));
