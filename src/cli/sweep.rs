@@ -118,6 +118,7 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
     let frames = args.frames;
     let output = folder.path().to_path_buf();
     let against_oracle = args.against_oracle;
+    let scene_label = name.clone();
     let rows = with_threads(
         args.common.threads,
         || -> Result<Vec<ResultRow>, Failure> {
@@ -126,7 +127,8 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
             for (point, scene) in &scenes {
                 bar.set_message(point.label());
                 let start = Instant::now();
-                let prepared = PreparedScene::new(scene)?;
+                let prepared = PreparedScene::new(scene)
+                    .map_err(|e| super::render_failure(e, scene, &scene_label))?;
                 let bake_ms = start.elapsed().as_secs_f64() * 1e3;
                 let mut times = Vec::new();
                 let mut last = None;
