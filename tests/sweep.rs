@@ -155,7 +155,82 @@ fn shards_merge_into_the_whole_sweep() {
         shard_dirs[0].to_str().unwrap(),
     ]);
     assert_eq!(twice.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&twice.stderr).contains("point 0"));
+    assert!(String::from_utf8_lossy(&twice.stderr).contains("their points overlap"));
+    // A shard left out is refused, naming it.
+    let refused = |shards: &[&std::path::Path], needle: &str| {
+        let out = dir.join("refused");
+        let mut args = vec!["sweep-merge", "-o", out.to_str().unwrap()];
+        args.extend(shards.iter().map(|d| d.to_str().unwrap()));
+        let o = pelage(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle), "{needle}: {err}");
+        assert!(!out.exists(), "nothing is written for refused shards");
+    };
+    refused(&[&shard_dirs[0], &shard_dirs[2]], "shard 2/3 is missing");
+    // A shard of another sweep (other values) is refused, though its columns match.
+    let other = dir.join("other2");
+    let mut args = sweep_args(other.to_str().unwrap());
+    args[2] = "number_of_shells=5,9".into();
+    args.extend(["--shard".to_string(), "2/3".to_string()]);
+    run(&args);
+    refused(
+        &[&shard_dirs[0], &other, &shard_dirs[2]],
+        "are from different sweeps",
+    );
+    // A shard whose rows were tampered with (a point of another shard) is refused.
+    let tampered = dir.join("tampered");
+    std::fs::create_dir_all(&tampered).expect("dir");
+    for file in ["sweep.txt", "results.csv"] {
+        std::fs::copy(shard_dirs[1].join(file), tampered.join(file)).expect("copy");
+    }
+    let csv = std::fs::read_to_string(tampered.join("results.csv")).expect("csv");
+    let first_row = csv.lines().nth(1).expect("a row").to_string();
+    let moved = first_row.replacen("1,", "2,", 1);
+    std::fs::write(
+        tampered.join("results.csv"),
+        csv.replace(&first_row, &moved),
+    )
+    .expect("write");
+    refused(
+        &[&shard_dirs[0], &tampered, &shard_dirs[2]],
+        "does not belong to shard 2/3",
+    );
+}
+
+#[test]
+fn a_sweep_replaces_an_earlier_sweep_whole_and_never_mixes() {
+    let dir = scratch("replace");
+    let out = dir.join("sweep");
+    run(&sweep_args(out.to_str().unwrap()));
+    assert!(out.join("point_0003.png").is_file());
+    // Two points into the same folder: the four of the earlier sweep are all gone.
+    let mut args = sweep_args(out.to_str().unwrap());
+    args.drain(3..5);
+    run(&args);
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "contact_sheet.png",
+            "fps.png",
+            "point_0000.png",
+            "point_0001.png",
+            "results.csv",
+            "sweep.txt"
+        ]
+    );
+    // A folder holding anything else is refused before work.
+    std::fs::write(out.join("notes.txt"), "mine").expect("write");
+    let o = pelage(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("notes.txt"), "{err}");
+    assert!(out.join("notes.txt").is_file() && out.join("point_0001.png").is_file());
 }
 
 #[test]

@@ -32,7 +32,8 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
     let dir = folder.path().to_path_buf();
     let summary = with_threads(args.common.threads, || {
         let bar = spinner("baking fur textures");
-        let prepared = PreparedScene::new(&scene).map_err(Failure::from)?;
+        let prepared = PreparedScene::new(&scene)
+            .map_err(|e| super::render_failure(e, &scene, &super::scene_name(&args.common)))?;
         bar.set_message("exporting");
         let result = export(&prepared, scene.time, &dir).map_err(|e| match e {
             ExportError::Render(e) => Failure::from(e),

@@ -157,9 +157,22 @@ pub fn render_failure(e: RenderError, scene: &Scene, name: &str) -> Failure {
             scene.fur.model_difference,
             pelage::fur::MAX_LENGTH
         ),
+        RenderError::Map(pelage::render::maps::MapError { key, .. })
+        | RenderError::Scene { key, .. } => format!("{}: {e}", with_line(name, key)),
         _ => format!("{name}: {e}"),
     };
     Failure { message, status }
+}
+
+/// `name:line` when `name` is a scene file that writes `key` (errors found after parsing, such
+/// as a map that cannot be read, name the line of the key at fault); `name` otherwise.
+fn with_line(name: &str, key: &str) -> String {
+    let text =
+        pelage::input::read_text(Path::new(name), pelage::scene::MAX_SCENE_BYTES, "scene").ok();
+    match text.and_then(|t| pelage::scene::line_of_key(&t, key)) {
+        Some(line) => format!("{name}:{line}"),
+        None => name.to_string(),
+    }
 }
 
 /// The scene named on the command line (or the embedded default), with the overrides applied

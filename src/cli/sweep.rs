@@ -3,6 +3,7 @@
 //! `results.csv`, `contact_sheet.png` and `fps.png`. `pelage sweep-merge` joins shards.
 
 use super::render::Backend;
+use super::staged::{EntryRule, StagedFolder};
 use super::{CommonArgs, Failure, apply_overrides, progress, scene_source, with_threads};
 use clap::Args;
 use pelage::render::PreparedScene;
@@ -105,11 +106,19 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         .collect();
     let max_memory = super::max_memory(args.common.max_memory);
     check_sheet(&sizes, parameters.len() + 1, max_memory, &name)?;
-    create_folder(&args.output)?;
+    let manifest = sweep::Manifest {
+        id: sweep_identity(&args, &text),
+        points: points.len(),
+        shard,
+    };
+    // Written whole into a staging folder, then renamed: an earlier sweep's folder is replaced,
+    // never mixed with this one's files.
+    let folder = StagedFolder::create(&args.output, sweep_folder_entries())?;
     let tile = args.common.tile;
     let frames = args.frames;
-    let output = args.output.clone();
+    let output = folder.path().to_path_buf();
     let against_oracle = args.against_oracle;
+    let scene_label = name.clone();
     let rows = with_threads(
         args.common.threads,
         || -> Result<Vec<ResultRow>, Failure> {
@@ -118,7 +127,8 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
             for (point, scene) in &scenes {
                 bar.set_message(point.label());
                 let start = Instant::now();
-                let prepared = PreparedScene::new(scene)?;
+                let prepared = PreparedScene::new(scene)
+                    .map_err(|e| super::render_failure(e, scene, &scene_label))?;
                 let bake_ms = start.elapsed().as_secs_f64() * 1e3;
                 let mut times = Vec::new();
                 let mut last = None;
@@ -177,44 +187,109 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         },
     )??;
     let names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
-    write_summary(&args.output, &names, &rows, max_memory)
+    write_summary(&output, &names, &rows, &manifest, max_memory)?;
+    folder.commit()
+}
+
+/// What decides a sweep's points and images, hashed into its `sweep.txt` id: shards of one
+/// sweep share it, a sweep of another scene or other values does not.
+fn sweep_identity(args: &SweepArgs, scene_text: &str) -> u64 {
+    let overrides = format!(
+        "{:?} {:?} {:?} {} {:?} {}",
+        args.common.width,
+        args.common.height,
+        args.common.time.map(f32::to_bits),
+        args.frames,
+        args.backend,
+        args.against_oracle
+    );
+    sweep::sweep_id(
+        std::iter::once(scene_text)
+            .chain(args.params.iter().map(String::as_str))
+            .chain(std::iter::once(overrides.as_str())),
+    )
+}
+
+/// What a sweep folder holds at its top level (a previous sweep's folder may be replaced).
+fn sweep_folder_entries() -> EntryRule {
+    EntryRule {
+        accepts: Box::new(|name: &str| {
+            let point = |rest: &str| {
+                rest.strip_prefix("point_").is_some_and(|digits| {
+                    digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit())
+                })
+            };
+            matches!(
+                name,
+                "results.csv" | "contact_sheet.png" | "fps.png" | sweep::MANIFEST_FILE
+            ) || name
+                .strip_suffix("_diff.png")
+                .or_else(|| name.strip_suffix(".png"))
+                .is_some_and(point)
+        }),
+        what: "part of a previous sweep",
+    }
 }
 
 pub fn merge(args: MergeArgs) -> Result<(), Failure> {
+    let bad = |e: sweep::SweepError| Failure::bad_input(e.0);
     let mut files = Vec::new();
+    let mut shards = Vec::new();
     for dir in &args.shards {
         let path = dir.join("results.csv");
         let text =
             pelage::input::read_text(&path, pelage::input::MAX_TABLE_BYTES, "shard's results")
                 .map_err(|e| Failure::bad_input(e.to_string()))?;
-        files.push((path.display().to_string(), text));
+        let name = path.display().to_string();
+        let (_, rows) = sweep::parse_results(&text, &name).map_err(bad)?;
+        let manifest_path = dir.join(sweep::MANIFEST_FILE);
+        let manifest_text = pelage::input::read_text(&manifest_path, 4096, "sweep manifest")
+            .map_err(|e| {
+                Failure::bad_input(format!(
+                    "{e} (every sweep folder has one since this version: run the shard again)"
+                ))
+            })?;
+        let manifest = sweep::Manifest::parse(&manifest_text, &manifest_path.display().to_string())
+            .map_err(bad)?;
+        shards.push((
+            dir.display().to_string(),
+            manifest,
+            rows.iter().map(|r| r.point).collect::<Vec<_>>(),
+        ));
+        files.push((name, text));
     }
-    let (names, rows) = sweep::merge_results(&files).map_err(|e| Failure::bad_input(e.0))?;
-    create_folder(&args.output)?;
+    sweep::check_shards(&shards).map_err(bad)?;
+    let (names, rows) = sweep::merge_results(&files).map_err(bad)?;
+    let manifest = sweep::Manifest {
+        shard: None,
+        ..shards[0].1.clone()
+    };
+    let folder = StagedFolder::create(&args.output, sweep_folder_entries())?;
+    let output = folder.path().to_path_buf();
     // The point renders come along, so the merged folder is a whole sweep.
     for row in &rows {
         let file = point_file(row.point);
-        let target = args.output.join(&file);
         if let Some(source) = args
             .shards
             .iter()
             .map(|d| d.join(&file))
             .find(|p| p.is_file())
-            && !same_file(&source, &target)
         {
             let bytes =
                 pelage::input::read(&source, pelage::input::MAX_IMAGE_FILE_BYTES, "point image")
                     .map_err(|e| Failure::bad_input(e.to_string()))?;
-            pelage::output::write_atomic(&target, &bytes)
+            pelage::output::write_atomic(&output.join(&file), &bytes)
                 .map_err(|e| Failure::other(e.to_string()))?;
         }
     }
     write_summary(
-        &args.output,
+        &output,
         &names,
         &rows,
+        &manifest,
         super::max_memory(args.max_memory),
-    )
+    )?;
+    folder.commit()
 }
 
 /// Refuses a contact sheet of renders of `sizes`, labelled with `label_lines` lines each, that
@@ -331,24 +406,8 @@ impl Renderer {
     }
 }
 
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
-    }
-}
-
 fn point_file(index: usize) -> String {
     format!("point_{index:04}.png")
-}
-
-fn create_folder(dir: &Path) -> Result<(), Failure> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Failure::other(format!(
-            "{}: cannot create the output folder: {e}",
-            dir.display()
-        ))
-    })
 }
 
 /// results.csv, the contact sheet (from the point PNGs in `dir`) and the fps plot. The sheet's
@@ -358,8 +417,14 @@ fn write_summary(
     dir: &Path,
     names: &[String],
     rows: &[ResultRow],
+    manifest: &sweep::Manifest,
     max_memory: u64,
 ) -> Result<(), Failure> {
+    pelage::output::write_atomic(
+        &dir.join(sweep::MANIFEST_FILE),
+        manifest.to_text().as_bytes(),
+    )
+    .map_err(|e| Failure::other(e.to_string()))?;
     let csv = sweep::write_results(names, rows).map_err(|e| Failure::other(e.0))?;
     pelage::output::write_atomic(&dir.join("results.csv"), csv.as_bytes())
         .map_err(|e| Failure::other(e.to_string()))?;

@@ -942,6 +942,16 @@ impl Scene {
             let message = e.message().trim().replace('\n', " ");
             // Name the key when the line holds one (serde's messages name only the type).
             let key = line.and_then(|l| validate::key_at_line(text, l));
+            // The guess first, the full list after it: "unknown field `number_of_shell`; did
+            // you mean `number_of_shells`? (expected one of …)".
+            let message = match (
+                validate::suggestion(&message),
+                message.split_once(", expected"),
+            ) {
+                (Some(guess), Some((head, list))) => format!("{head}; {guess} (expected{list})"),
+                (Some(guess), None) => format!("{message}; {guess}"),
+                (None, _) => message,
+            };
             SceneError {
                 file: file.to_string(),
                 line,
@@ -1013,6 +1023,12 @@ impl Scene {
             message,
         })
     }
+}
+
+/// The 1-based line of a dotted scene key (`maps.length`, `spots[1].radii`) in scene text, for
+/// errors found after parsing (a map that cannot be read); `None` when it is not written.
+pub fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
+    validate::line_of_key(text, dotted)
 }
 
 fn line_of_offset(text: &str, offset: usize) -> usize {

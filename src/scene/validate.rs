@@ -241,7 +241,7 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     range_f32("fur.min_height", f.min_height, 0.01, 1.0)?;
     range_f32("fur.base_thickness", f.base_thickness, 0.0001, 0.25)?;
     range_f32("fur.tip_thickness", f.tip_thickness, 0.0, 0.25)?;
-    positive("fur.gaussian_sigma", f.gaussian_sigma)?;
+    range_f32("fur.gaussian_sigma", f.gaussian_sigma, 0.001, 1000.0)?;
     range_f32("fur.fin_height_scale", f.fin_height_scale, 0.1, 10.0)?;
     for (k, w) in f.fin_windows.iter().enumerate() {
         let key = format!("fur.fin_windows[{k}]");
@@ -498,6 +498,39 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Levenshtein distance between two keys (insertions, deletions, substitutions of chars).
+pub(super) fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let substitute = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitute.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
+/// For serde's "unknown field `X`, expected one of `a`, `b`, …" (or "unknown variant"), the
+/// known name nearest to `X` when it is near enough to be a misspelling (at most a third of
+/// its letters differ, 1 to 3 edits): "did you mean `number_of_shells`?".
+pub(super) fn suggestion(message: &str) -> Option<String> {
+    if !(message.starts_with("unknown field `") || message.starts_with("unknown variant `")) {
+        return None;
+    }
+    // Backticked words: the unknown one, then the expected ones.
+    let mut words = message.split('`').skip(1).step_by(2);
+    let unknown = words.next()?;
+    let limit = (unknown.chars().count() / 3).clamp(1, 3);
+    let (distance, best) = words
+        .map(|known| (edit_distance(unknown, known), known))
+        .min_by_key(|&(d, _)| d)?;
+    (distance <= limit).then(|| format!("did you mean `{best}`?"))
+}
+
 /// Finds the 1-based line of a dotted key (`fur.number_of_shells`) by following table
 /// headers; `None` when the key is not written in the file (a default failed, or an inline
 /// table hides it).
@@ -537,7 +570,17 @@ pub(super) fn line_of_key(text: &str, dotted: &str) -> Option<usize> {
             return Some(n + 1);
         }
     }
-    table_line
+    // A whole array of tables (`spots`): its first `[[spots]]` header.
+    table_line.or_else(|| {
+        text.lines()
+            .position(|raw| {
+                let line = raw.split('#').next().unwrap_or("").trim();
+                line.strip_prefix("[[")
+                    .and_then(|l| l.strip_suffix("]]"))
+                    .is_some_and(|h| h.trim() == dotted)
+            })
+            .map(|n| n + 1)
+    })
 }
 
 /// The dotted key written on 1-based `line` (`fur.number_of_shells`, `spots[1].radii`), or the
@@ -602,6 +645,37 @@ fn line_in_array_table(text: &str, array: &str, index: usize, key: &str) -> Opti
         }
     }
     header_line
+}
+
+#[cfg(test)]
+mod suggestion_tests {
+    use super::*;
+
+    #[test]
+    fn misspelt_keys_get_the_nearest_known_key_and_others_none() {
+        assert_eq!(edit_distance("number_of_shell", "number_of_shells"), 1);
+        assert_eq!(edit_distance("speculr", "specular"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        let fur = "unknown field `number_of_shell`, expected one of `number_of_strands`, \
+                   `number_of_shells`, `texture_resolution`";
+        assert_eq!(
+            suggestion(fur).as_deref(),
+            Some("did you mean `number_of_shells`?")
+        );
+        let kind = "unknown variant `toru`, expected one of `torus`, `sphere`";
+        assert_eq!(suggestion(kind).as_deref(), Some("did you mean `torus`?"));
+        // Too far from anything: no guess.
+        let far = "unknown field `weights`, expected one of `fins`, `curl`";
+        assert_eq!(suggestion(far), None);
+        assert_eq!(suggestion("invalid type: string \"a\", expected u32"), None);
+    }
+
+    #[test]
+    fn an_array_of_tables_is_found_by_its_first_header() {
+        let text = "seed = 1\n[image]\nwidth = 8\n[[spots]]\n[[spots]]\n";
+        assert_eq!(line_of_key(text, "spots"), Some(4));
+    }
 }
 
 #[cfg(test)]

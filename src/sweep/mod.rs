@@ -11,10 +11,12 @@
 //! ([`merge_results`]).
 
 mod csv;
+mod manifest;
 mod plot;
 mod sheet;
 
 pub use csv::{ResultRow, merge_results, parse_results, write_results};
+pub use manifest::{MANIFEST_FILE, Manifest, check_shards, sweep_id};
 pub use plot::fps_plot;
 pub use sheet::{SheetLayout, contact_sheet};
 
