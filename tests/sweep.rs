@@ -71,6 +71,8 @@ fn a_sweep_writes_csv_renders_sheet_and_plot() {
     for file in [
         "contact_sheet.png",
         "fps.png",
+        "frame_time.png",
+        "fragments.png",
         "point_0000.png",
         "point_0003.png",
     ] {

@@ -236,4 +236,65 @@ mod window {
             assert!(moved.wind.is_some() && moved.burn.is_some());
         }
     }
+
+    /// The window's size from the viewer's closing report ("... in a WxH window ...").
+    fn window_size(err: &str) -> (u32, u32) {
+        let size = err
+            .split(" in a ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .unwrap_or_else(|| panic!("no window size in {err}"));
+        let (w, h) = size.split_once('x').expect("WxH");
+        (w.parse().expect("w"), h.parse().expect("h"))
+    }
+
+    #[test]
+    fn a_window_larger_than_the_screen_is_scaled_down_and_the_image_keeps_its_size() {
+        let Some(display) = display() else {
+            return;
+        };
+        let dir = scratch("fit");
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, SMALL).expect("write scene");
+        let shot = dir.join("shot.png");
+        let args = [
+            "view",
+            scene.to_str().expect("utf-8"),
+            "--width",
+            "1366",
+            "--height",
+            "768",
+            "--frames",
+            "2",
+            "--screenshot",
+            shot.to_str().expect("utf-8"),
+        ];
+        // A 1280×800 screen (stood in for by PELAGE_VIEW_SCREEN): the window fits inside it
+        // with room for a title bar, same shape; the screenshot is the full 1366×768 image.
+        let o = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(args)
+            .env("DISPLAY", &display)
+            .env("PELAGE_VIEW_SCREEN", "1280x800")
+            .output()
+            .expect("pelage runs");
+        let err = stderr(&o);
+        assert!(o.status.success(), "{err}");
+        let (w, h) = window_size(&err);
+        assert!(w <= 1240 && h <= 720, "{w}x{h}: {err}");
+        assert!(
+            (f64::from(w) / f64::from(h) - 1366.0 / 768.0).abs() < 0.01,
+            "{w}x{h}"
+        );
+        let image = image::open(&shot).expect("screenshot");
+        assert_eq!((image.width(), image.height()), (1366, 768));
+        // The real screen, read over the X protocol: xvfb-run's is 1280×1024, narrower than
+        // the image, so the window is scaled down there too.
+        if std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() == Ok("1") {
+            let o = pelage(&args, Some(&display));
+            let err = stderr(&o);
+            assert!(o.status.success(), "{err}");
+            let (w, _) = window_size(&err);
+            assert!(w < 1366, "{w}: {err}");
+        }
+    }
 }

@@ -296,6 +296,16 @@ fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(),
     let csv = sweep::write_results(names, rows).map_err(|e| Failure::other(e.0))?;
     pelage::output::write_atomic(&dir.join("results.csv"), csv.as_bytes())
         .map_err(|e| Failure::other(e.to_string()))?;
+    // Each thumbnail is labelled with the values that differ between points (all of them when
+    // there is only one point) and its frame rate and time.
+    let differing: Vec<usize> = (0..names.len())
+        .filter(|&i| rows.iter().any(|r| r.values[i] != rows[0].values[i]))
+        .collect();
+    let labelled: Vec<usize> = if differing.is_empty() {
+        (0..names.len()).collect()
+    } else {
+        differing
+    };
     let mut cells = Vec::new();
     for row in rows {
         let path = dir.join(point_file(row.point));
@@ -306,12 +316,14 @@ fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(),
             );
             continue;
         };
-        let mut label: Vec<String> = names
+        let mut label: Vec<String> = labelled
             .iter()
-            .zip(&row.values)
-            .map(|(n, v)| format!("{n}={v}"))
+            .map(|&i| format!("{} = {}", names[i], row.values[i]))
             .collect();
-        label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
+        label.push(format!(
+            "{:.2} fps, {:.1} ms a frame",
+            row.fps, row.median_frame_ms
+        ));
         cells.push((image, label));
     }
     if let Some(sheet) = sweep::contact_sheet(&cells) {
@@ -322,8 +334,15 @@ fn write_summary(dir: &Path, names: &[String], rows: &[ResultRow]) -> Result<(),
             &sheet,
         )?;
     }
-    if let Some(plot) = sweep::fps_plot(names, rows) {
-        super::write_png(&dir.join("fps.png"), plot.width(), plot.height(), &plot)?;
+    for metric in sweep::Metric::ALL {
+        if let Some(plot) = sweep::metric_plot(names, rows, metric).map_err(Failure::other)? {
+            super::write_png(
+                &dir.join(metric.file_name()),
+                plot.width(),
+                plot.height(),
+                &plot,
+            )?;
+        }
     }
     Ok(())
 }

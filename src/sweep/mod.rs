@@ -15,7 +15,7 @@ mod plot;
 mod sheet;
 
 pub use csv::{ResultRow, merge_results, parse_results, write_results};
-pub use plot::fps_plot;
+pub use plot::{Metric, fps_plot, metric_plot};
 pub use sheet::contact_sheet;
 
 use crate::scene::Scene;
