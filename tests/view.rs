@@ -297,4 +297,70 @@ mod window {
             assert!(w < 1366, "{w}: {err}");
         }
     }
+
+    #[test]
+    fn a_12_ms_key_tap_is_not_lost() {
+        // `q` pressed for 12 ms (shorter than a 60 Hz frame) through the X test extension
+        // (xdotool): the viewer must see it and quit. Acting on key state polled once a frame
+        // lost such taps. Needs xdotool; CI (PELAGE_REQUIRE_DISPLAY=1) installs it.
+        let Some(display) = display() else {
+            return;
+        };
+        let has_xdotool = Command::new("xdotool")
+            .arg("version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !has_xdotool {
+            assert!(
+                std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() != Ok("1"),
+                "PELAGE_REQUIRE_DISPLAY=1 but xdotool is missing: apt-get install xdotool"
+            );
+            eprintln!("no xdotool: the key tap test is skipped");
+            return;
+        }
+        let dir = scratch("tap");
+        let scene = dir.join("tap-scene.toml");
+        std::fs::write(&scene, SMALL).expect("write scene");
+        let mut viewer = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(["view", scene.to_str().expect("utf-8")])
+            .env("DISPLAY", &display)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("pelage view starts");
+        let xdotool = |args: &[&str]| {
+            Command::new("xdotool")
+                .args(args)
+                .env("DISPLAY", &display)
+                .output()
+                .expect("xdotool runs")
+        };
+        let found = xdotool(&["search", "--sync", "--onlyvisible", "--name", "tap-scene"]);
+        let window = String::from_utf8_lossy(&found.stdout)
+            .lines()
+            .next()
+            .unwrap_or("")
+            .to_string();
+        if window.is_empty() {
+            let _ = viewer.kill();
+            panic!("the viewer's window did not appear");
+        }
+        xdotool(&["windowfocus", "--sync", &window]);
+        // Let the viewer reach its frame loop, then tap.
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        xdotool(&["keydown", "q", "sleep", "0.012", "keyup", "q"]);
+        let start = std::time::Instant::now();
+        let status = loop {
+            if let Some(status) = viewer.try_wait().expect("wait") {
+                break Some(status);
+            }
+            if start.elapsed() > std::time::Duration::from_secs(10) {
+                let _ = viewer.kill();
+                let _ = viewer.wait();
+                break None;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        let status = status.expect("a 12 ms tap of q was lost: the viewer kept running");
+        assert!(status.success(), "{status}");
+    }
 }

@@ -85,19 +85,25 @@ fn pool(threads: Option<u32>, name: &'static str) -> Result<Arc<ThreadPool>, Fai
 
 /// The size of the X screen the window opens on (`PELAGE_VIEW_SCREEN=WxH` stands in for it:
 /// for trying a small screen); `None` when it cannot be read (the window is then image-sized).
-fn screen_size() -> Option<(usize, usize)> {
+/// The connection comes back too, to be closed only once the window is open: an X server with
+/// no client left resets (Xvfb does), and a window opened during the reset fails.
+fn screen_size() -> Option<(
+    (usize, usize),
+    Option<x11rb::rust_connection::RustConnection>,
+)> {
     if let Ok(text) = std::env::var("PELAGE_VIEW_SCREEN") {
         let (w, h) = text.split_once('x')?;
-        return Some((w.trim().parse().ok()?, h.trim().parse().ok()?));
+        return Some(((w.trim().parse().ok()?, h.trim().parse().ok()?), None));
     }
     let (connection, number) = x11rb::connect(None).ok()?;
     let screen = x11rb::connection::Connection::setup(&connection)
         .roots
         .get(number)?;
-    Some((
+    let size = (
         usize::from(screen.width_in_pixels),
         usize::from(screen.height_in_pixels),
-    ))
+    );
+    Some((size, Some(connection)))
 }
 
 /// Room left on the screen for the window's frame and title bar and a desktop panel, pixels.
@@ -141,13 +147,15 @@ impl InputCallback for KeyEvents {
 /// Opens the window on `scene` and runs until it is closed (or for `options.frames` frames).
 pub fn run(scene: Scene, options: Options) -> Result<(), Failure> {
     let display = display()?;
+    let screen = screen_size();
     let (width, height) = fit_window(
         scene.image.width as usize,
         scene.image.height as usize,
-        screen_size(),
+        screen.as_ref().map(|s| s.0),
     );
     let mut window = Window::new(&options.title, width, height, WindowOptions::default())
         .map_err(|e| Failure::other(format!("cannot open a window on display {display}: {e}")))?;
+    drop(screen);
     let key_events = Arc::new(Mutex::new(Vec::new()));
     window.set_input_callback(Box::new(KeyEvents(Arc::clone(&key_events))));
     let mut viewer = Viewer::new(scene, options, (width, height), key_events)?;
