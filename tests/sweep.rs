@@ -235,7 +235,10 @@ fn the_gnu_parallel_recipe_gives_the_whole_sweep() {
     let whole = dir.join("whole");
     run(&sweep_args(whole.to_str().unwrap()));
     let merged = dir.join("merged");
-    let recipe = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cluster/sweep-parallel.sh");
+    let recipe = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/cluster/sweep-parallel.sh"
+    );
     let args = sweep_args("unused");
     let o = std::process::Command::new("bash")
         .arg(recipe)
@@ -246,11 +249,7 @@ fn the_gnu_parallel_recipe_gives_the_whole_sweep() {
         .env("JOBS", "3")
         .output()
         .expect("bash runs");
-    assert!(
-        o.status.success(),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = |d: &std::path::Path| {
         points_and_values(&std::fs::read_to_string(d.join("results.csv")).expect("csv"))
     };
