@@ -511,7 +511,11 @@ impl Viewer {
             )
         });
         lines.push(format!("{first}{}  H: keys", baking.unwrap_or_default()));
-        lines.push(self.state.describe());
+        lines.extend(wrap(
+            &self.state.describe(),
+            px,
+            self.width.saturating_sub(8),
+        ));
         if let Some((m, at)) = &self.message
             && at.elapsed() < Duration::from_secs(5)
         {
@@ -698,6 +702,22 @@ fn draw_lines(canvas: &mut Canvas, top: usize, lines: &[String], px: f32) {
     }
 }
 
+/// `text`'s fields (separated by two spaces) in lines no wider than `width` pixels at `px`
+/// (a field wider than that gets a line of its own).
+fn wrap(text: &str, px: f32, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for field in text.split("  ").filter(|f| !f.is_empty()) {
+        match lines.last_mut() {
+            Some(line) if font::text_width(&format!("{line}  {field}"), px) <= width => {
+                line.push_str("  ");
+                line.push_str(field);
+            }
+            _ => lines.push(field.to_string()),
+        }
+    }
+    lines
+}
+
 /// The frame rate and frame time of the status line: both from the same frame time, so that
 /// they agree (`fps × ms = 1000`); `still` when no new frame arrived in the last second.
 pub fn rate_text(frame_ms: f64, arriving: bool) -> String {
@@ -838,5 +858,16 @@ mod tests {
         // A window that fits keeps the image's size; no screen known: the image's size.
         assert_eq!(fit_window(640, 480, Some((1280, 800))), (640, 480));
         assert_eq!(fit_window(4000, 3000, None), (4000, 3000));
+    }
+
+    #[test]
+    fn a_long_status_line_wraps_at_its_fields() {
+        let text = "t 4.88 s  shells 30  texture 128  wind on  burn off  spots off  LOD off";
+        let wide = wrap(text, 14.0, 2000);
+        assert_eq!(wide, vec![text.to_string()]);
+        let narrow = wrap(text, 14.0, 200);
+        assert!(narrow.len() > 1, "{narrow:?}");
+        assert!(narrow.iter().all(|l| font::text_width(l, 14.0) <= 200));
+        assert_eq!(narrow.join("  "), text);
     }
 }
