@@ -33,7 +33,7 @@ pub struct SweepArgs {
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
     /// With `--backend gpu`: also render every point with the oracle and add the comparison's
-    /// metrics to results.csv (and a heat map `point_NNNN_diff.png`).
+    /// metrics to results.csv (and a heat map with its legend, `point_NNNN_diff.png`).
     #[arg(long)]
     pub against_oracle: bool,
     /// The tolerance `--against-oracle` judges by (see `pelage compare --tolerance`).
@@ -124,6 +124,10 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                     extra = oracle_columns(&c);
                     let heat = pelage::compare::heat_map(&oracle, &image)
                         .map_err(|e| Failure::other(e.to_string()))?;
+                    let heat = pelage::compare::legend::with_legend(
+                        &heat,
+                        pelage::compare::legend::Legend::Heat,
+                    );
                     super::write_png(
                         &output.join(format!("point_{:04}_diff.png", point.index)),
                         heat.width(),
