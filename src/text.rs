@@ -1,5 +1,6 @@
-//! A 5×7 bitmap font for text drawn into images: the labels of sweep contact sheets and plots,
-//! and the viewer's status line. Upper-case letters, digits and common punctuation; lower-case
+//! A 5×7 bitmap font for the labels of the strand diagrams (thesis figures 3.2–3.7, whose
+//! reference PNGs it is part of). Plots, legends, contact sheets and the viewer use the real
+//! font of [`crate::font`]. Upper-case letters, digits and common punctuation; lower-case
 //! letters are drawn as capitals, and any other character as `?`. Each glyph is seven rows of
 //! five bits, the leftmost pixel in bit 4; glyphs advance six pixels and lines nine.
 

@@ -155,6 +155,26 @@ fn folders_are_compared_pair_by_pair_worst_first() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
+    // The report folder used again holds only this report's images (2 pairs × 4), and what
+    // else it held is kept.
+    std::fs::write(out.join("images/notes.txt"), "mine").expect("write");
+    for name in ["slight.png", "float.png"] {
+        std::fs::remove_file(r.join(name)).expect("rm");
+    }
+    let again = [
+        "compare",
+        path(&r),
+        path(&c),
+        "-o",
+        path(&out),
+        "--tolerance",
+        "psnr=5",
+    ];
+    assert_eq!(pelage(&again).status.code(), Some(0));
+    let images = std::fs::read_dir(out.join("images"))
+        .expect("images")
+        .count();
+    assert_eq!(images, 2 * 4 + 1);
 }
 
 #[test]

@@ -71,6 +71,8 @@ fn a_sweep_writes_csv_renders_sheet_and_plot() {
     for file in [
         "contact_sheet.png",
         "fps.png",
+        "frame_time.png",
+        "fragments.png",
         "point_0000.png",
         "point_0003.png",
     ] {
@@ -285,4 +287,62 @@ fn bad_parameters_are_refused_before_rendering() {
         dir.join("x").to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn the_gnu_parallel_recipe_gives_the_whole_sweep() {
+    // docs/cluster/sweep-parallel.sh: 3 shards at once with GNU parallel, merged; the same
+    // points, values and images as one sweep. Skipped without `parallel` unless
+    // PELAGE_REQUIRE_PARALLEL=1 (CI installs it).
+    let has_parallel = std::process::Command::new("parallel")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_parallel {
+        assert!(
+            std::env::var("PELAGE_REQUIRE_PARALLEL").as_deref() != Ok("1"),
+            "PELAGE_REQUIRE_PARALLEL=1 but GNU parallel is missing: apt-get install parallel"
+        );
+        eprintln!("note: GNU parallel is not installed; the recipe was not run");
+        return;
+    }
+    let dir = scratch("parallel");
+    let whole = dir.join("whole");
+    run(&sweep_args(whole.to_str().unwrap()));
+    let merged = dir.join("merged");
+    let recipe = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/cluster/sweep-parallel.sh"
+    );
+    let args = sweep_args("unused");
+    let o = std::process::Command::new("bash")
+        .arg(recipe)
+        .arg("3")
+        .arg(&merged)
+        .args(&args[1..args.len() - 2])
+        .env("PELAGE", env!("CARGO_BIN_EXE_pelage"))
+        .env("JOBS", "3")
+        .output()
+        .expect("bash runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = |d: &std::path::Path| {
+        points_and_values(&std::fs::read_to_string(d.join("results.csv")).expect("csv"))
+    };
+    assert_eq!(csv(&merged), csv(&whole));
+    for k in 0..4 {
+        let file = format!("point_{k:04}.png");
+        assert_eq!(
+            std::fs::read(merged.join(&file)).expect("merged point"),
+            std::fs::read(whole.join(&file)).expect("whole point"),
+            "{file}"
+        );
+    }
+    assert!(merged.join("fps.png").is_file() && merged.join("contact_sheet.png").is_file());
+    // The shards' folder is removed afterwards.
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .expect("list")
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().contains(".shards."))
+        .collect();
+    assert!(left.is_empty());
 }

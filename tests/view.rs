@@ -236,4 +236,131 @@ mod window {
             assert!(moved.wind.is_some() && moved.burn.is_some());
         }
     }
+
+    /// The window's size from the viewer's closing report ("... in a WxH window ...").
+    fn window_size(err: &str) -> (u32, u32) {
+        let size = err
+            .split(" in a ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .unwrap_or_else(|| panic!("no window size in {err}"));
+        let (w, h) = size.split_once('x').expect("WxH");
+        (w.parse().expect("w"), h.parse().expect("h"))
+    }
+
+    #[test]
+    fn a_window_larger_than_the_screen_is_scaled_down_and_the_image_keeps_its_size() {
+        let Some(display) = display() else {
+            return;
+        };
+        let dir = scratch("fit");
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, SMALL).expect("write scene");
+        let shot = dir.join("shot.png");
+        let args = [
+            "view",
+            scene.to_str().expect("utf-8"),
+            "--width",
+            "1366",
+            "--height",
+            "768",
+            "--frames",
+            "2",
+            "--screenshot",
+            shot.to_str().expect("utf-8"),
+        ];
+        // A 1280×800 screen (stood in for by PELAGE_VIEW_SCREEN): the window fits inside it
+        // with room for a title bar, same shape; the screenshot is the full 1366×768 image.
+        let o = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(args)
+            .env("DISPLAY", &display)
+            .env("PELAGE_VIEW_SCREEN", "1280x800")
+            .output()
+            .expect("pelage runs");
+        let err = stderr(&o);
+        assert!(o.status.success(), "{err}");
+        let (w, h) = window_size(&err);
+        assert!(w <= 1240 && h <= 720, "{w}x{h}: {err}");
+        assert!(
+            (f64::from(w) / f64::from(h) - 1366.0 / 768.0).abs() < 0.01,
+            "{w}x{h}"
+        );
+        let image = image::open(&shot).expect("screenshot");
+        assert_eq!((image.width(), image.height()), (1366, 768));
+        // The real screen, read over the X protocol: xvfb-run's is 1280×1024, narrower than
+        // the image, so the window is scaled down there too.
+        if std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() == Ok("1") {
+            let o = pelage(&args, Some(&display));
+            let err = stderr(&o);
+            assert!(o.status.success(), "{err}");
+            let (w, _) = window_size(&err);
+            assert!(w < 1366, "{w}: {err}");
+        }
+    }
+
+    #[test]
+    fn a_12_ms_key_tap_is_not_lost() {
+        // `q` pressed for 12 ms (shorter than a 60 Hz frame) through the X test extension
+        // (xdotool): the viewer must see it and quit. Acting on key state polled once a frame
+        // lost such taps. Needs xdotool; CI (PELAGE_REQUIRE_DISPLAY=1) installs it.
+        let Some(display) = display() else {
+            return;
+        };
+        let has_xdotool = Command::new("xdotool")
+            .arg("version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !has_xdotool {
+            assert!(
+                std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() != Ok("1"),
+                "PELAGE_REQUIRE_DISPLAY=1 but xdotool is missing: apt-get install xdotool"
+            );
+            eprintln!("no xdotool: the key tap test is skipped");
+            return;
+        }
+        let dir = scratch("tap");
+        let scene = dir.join("tap-scene.toml");
+        std::fs::write(&scene, SMALL).expect("write scene");
+        let mut viewer = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(["view", scene.to_str().expect("utf-8")])
+            .env("DISPLAY", &display)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("pelage view starts");
+        let xdotool = |args: &[&str]| {
+            Command::new("xdotool")
+                .args(args)
+                .env("DISPLAY", &display)
+                .output()
+                .expect("xdotool runs")
+        };
+        let found = xdotool(&["search", "--sync", "--onlyvisible", "--name", "tap-scene"]);
+        let window = String::from_utf8_lossy(&found.stdout)
+            .lines()
+            .next()
+            .unwrap_or("")
+            .to_string();
+        if window.is_empty() {
+            let _ = viewer.kill();
+            panic!("the viewer's window did not appear");
+        }
+        xdotool(&["windowfocus", "--sync", &window]);
+        // Let the viewer reach its frame loop, then tap.
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        xdotool(&["keydown", "q", "sleep", "0.012", "keyup", "q"]);
+        let start = std::time::Instant::now();
+        let status = loop {
+            if let Some(status) = viewer.try_wait().expect("wait") {
+                break Some(status);
+            }
+            if start.elapsed() > std::time::Duration::from_secs(10) {
+                let _ = viewer.kill();
+                let _ = viewer.wait();
+                break None;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        let status = status.expect("a 12 ms tap of q was lost: the viewer kept running");
+        assert!(status.success(), "{status}");
+    }
 }

@@ -226,6 +226,7 @@ fn compare_folders(args: &CompareArgs, tolerance: &Tolerance) -> Result<(), Fail
     }
     std::fs::create_dir_all(report.join("images"))
         .map_err(|e| Failure::other(format!("-o {}: {e}", report.display())))?;
+    remove_old_images(&report.join("images"))?;
     let mut rows = Vec::new();
     for (index, pair) in pairing.pairs.into_iter().enumerate() {
         rows.push(compare_pair(args, tolerance, report, index, pair)?);
@@ -288,4 +289,24 @@ fn compare_folders(args: &CompareArgs, tolerance: &Tolerance) -> Result<(), Fail
             status,
         }),
     }
+}
+
+/// Removes the images a previous report wrote (`NNNN-reference.png` and the like), so that a
+/// report folder used again holds only this report's; other files are left alone.
+fn remove_old_images(folder: &Path) -> Result<(), Failure> {
+    let entries = std::fs::read_dir(folder)
+        .map_err(|e| Failure::other(format!("{}: {e}", folder.display())))?;
+    for entry in entries.filter_map(Result::ok) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let ours = name.split_once('-').is_some_and(|(n, kind)| {
+            n.len() == 4
+                && n.bytes().all(|b| b.is_ascii_digit())
+                && ["reference.png", "heat.png", "capture.png", "flip.png"].contains(&kind)
+        });
+        if ours {
+            std::fs::remove_file(entry.path())
+                .map_err(|e| Failure::other(format!("{}: {e}", entry.path().display())))?;
+        }
+    }
+    Ok(())
 }

@@ -34,7 +34,7 @@ pub struct SweepArgs {
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
     /// With `--backend gpu`: also render every point with the oracle and add the comparison's
-    /// metrics to results.csv (and a heat map `point_NNNN_diff.png`).
+    /// metrics to results.csv (and a heat map with its legend, `point_NNNN_diff.png`).
     #[arg(long)]
     pub against_oracle: bool,
     /// The tolerance `--against-oracle` judges by (see `pelage compare --tolerance`).
@@ -154,6 +154,10 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                     extra = oracle_columns(&c);
                     let heat = pelage::compare::heat_map(&oracle, &image)
                         .map_err(|e| Failure::other(e.to_string()))?;
+                    let heat = pelage::compare::legend::with_legend(
+                        &heat,
+                        pelage::compare::legend::Legend::Heat,
+                    );
                     super::write_png(
                         &output.join(format!("point_{:04}_diff.png", point.index)),
                         heat.width(),
@@ -428,6 +432,16 @@ fn write_summary(
     let csv = sweep::write_results(names, rows).map_err(|e| Failure::other(e.0))?;
     pelage::output::write_atomic(&dir.join("results.csv"), csv.as_bytes())
         .map_err(|e| Failure::other(e.to_string()))?;
+    // Each thumbnail is labelled with the values that differ between points (all of them when
+    // there is only one point) and its frame rate and time.
+    let differing: Vec<usize> = (0..names.len())
+        .filter(|&i| rows.iter().any(|r| r.values[i] != rows[0].values[i]))
+        .collect();
+    let labelled: Vec<usize> = if differing.is_empty() {
+        (0..names.len()).collect()
+    } else {
+        differing
+    };
     let mut found = Vec::new();
     for row in rows {
         let path = dir.join(point_file(row.point));
@@ -440,7 +454,7 @@ fn write_summary(
         }
     }
     let sizes: Vec<(u32, u32)> = found.iter().map(|&(_, _, size)| size).collect();
-    let label_lines = names.len() + 1;
+    let label_lines = labelled.len() + 1;
     check_sheet(&sizes, label_lines, max_memory, &dir.display().to_string())?;
     let mut cells = Vec::new();
     if let Some(layout) = sweep::SheetLayout::new(&sizes, label_lines) {
@@ -454,12 +468,14 @@ fn write_summary(
             };
             let thumbnail = layout.thumbnail(&image).into_owned();
             drop(image);
-            let mut label: Vec<String> = names
+            let mut label: Vec<String> = labelled
                 .iter()
-                .zip(&row.values)
-                .map(|(n, v)| format!("{n}={v}"))
+                .map(|&i| format!("{} = {}", names[i], row.values[i]))
                 .collect();
-            label.push(format!("{:.2} FPS, {:.0} MS", row.fps, row.median_frame_ms));
+            label.push(format!(
+                "{:.2} fps, {:.1} ms a frame",
+                row.fps, row.median_frame_ms
+            ));
             cells.push((thumbnail, label));
         }
     }
@@ -471,8 +487,15 @@ fn write_summary(
             &sheet,
         )?;
     }
-    if let Some(plot) = sweep::fps_plot(names, rows) {
-        super::write_png(&dir.join("fps.png"), plot.width(), plot.height(), &plot)?;
+    for metric in sweep::Metric::ALL {
+        if let Some(plot) = sweep::metric_plot(names, rows, metric).map_err(Failure::other)? {
+            super::write_png(
+                &dir.join(metric.file_name()),
+                plot.width(),
+                plot.height(),
+                &plot,
+            )?;
+        }
     }
     Ok(())
 }

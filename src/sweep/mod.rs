@@ -17,7 +17,7 @@ mod sheet;
 
 pub use csv::{ResultRow, merge_results, parse_results, write_results};
 pub use manifest::{MANIFEST_FILE, Manifest, check_shards, sweep_id};
-pub use plot::fps_plot;
+pub use plot::{Metric, fps_plot, metric_plot};
 pub use sheet::{SheetLayout, contact_sheet};
 
 use crate::scene::Scene;

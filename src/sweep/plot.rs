@@ -1,21 +1,20 @@
-//! The frame-rate plot of a sweep: fps against the first parameter, one line per combination
-//! of the other parameters. Drawn with tiny-skia (anti-aliased lines), labelled with the bitmap
-//! font.
+//! The plots of a sweep, drawn with `plotters` (bitmap backend; text in the embedded DejaVu Sans
+//! through `ab_glyph`, no system font): frames per second, median frame time and fragments
+//! shaded, each against the first parameter that varies, one line per combination of the
+//! other parameters, with a title, axis labels with units, ticks and a legend under the plot.
 
 use super::ResultRow;
-use crate::text;
 use image::RgbaImage;
-use tiny_skia::{Color, Paint, PathBuilder, Pixmap, Stroke, Transform};
+use plotters::prelude::*;
 
-const WIDTH: u32 = 900;
-const HEIGHT: u32 = 540;
-const LEFT: f32 = 70.0;
-const RIGHT: f32 = 30.0;
-const TOP: f32 = 40.0;
-const BOTTOM: f32 = 60.0;
-const INK: [u8; 4] = [30, 30, 30, 255];
+/// Plot size in pixels.
+pub const WIDTH: u32 = 900;
+/// Plot height in pixels, legend included.
+pub const HEIGHT: u32 = 600;
+/// Font family name the embedded font is registered under.
+const FAMILY: &str = "pelage-sans";
 /// Line colours, one per series, repeating.
-const PALETTE: [[u8; 3]; 6] = [
+pub const PALETTE: [[u8; 3]; 6] = [
     [31, 119, 180],
     [214, 39, 40],
     [44, 160, 44],
@@ -23,16 +22,103 @@ const PALETTE: [[u8; 3]; 6] = [
     [255, 127, 14],
     [23, 190, 207],
 ];
+/// Series listed in the legend before "… and N more".
+const LEGEND_ROWS: usize = 6;
 
-/// Plots fps against the first parameter that takes more than one value (the first parameter
-/// when none does), so that `--param number_of_spots=2 --param specular_tangents=1,3` plots
-/// against the tangents. Its values are placed by number when every one is a number, else
-/// evenly in point order. Rows with the same values of the other parameters form one line,
-/// labelled in a legend. `None` without rows.
-pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> {
-    if rows.is_empty() || parameters.is_empty() {
-        return None;
+/// What a plot shows on its y axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Metric {
+    /// Frames per second (from the median frame time).
+    Fps,
+    /// Median frame time, milliseconds.
+    FrameTime,
+    /// Fragments shaded in one frame.
+    Fragments,
+}
+
+impl Metric {
+    /// Every metric, in the order the sweep writes them.
+    pub const ALL: [Metric; 3] = [Metric::Fps, Metric::FrameTime, Metric::Fragments];
+
+    /// The file the sweep writes the plot to.
+    pub fn file_name(self) -> &'static str {
+        match self {
+            Metric::Fps => "fps.png",
+            Metric::FrameTime => "frame_time.png",
+            Metric::Fragments => "fragments.png",
+        }
     }
+
+    /// The plot's title.
+    pub fn title(self) -> &'static str {
+        match self {
+            Metric::Fps => "Frame rate",
+            Metric::FrameTime => "Frame time",
+            Metric::Fragments => "Fragments shaded",
+        }
+    }
+
+    /// The y axis label, with its unit.
+    pub fn axis_label(self) -> &'static str {
+        match self {
+            Metric::Fps => "frames per second (fps, from the median frame time)",
+            Metric::FrameTime => "median frame time (ms)",
+            Metric::Fragments => "fragments shaded per frame (millions)",
+        }
+    }
+
+    /// The row's value on this plot's y axis.
+    pub fn value(self, row: &ResultRow) -> f64 {
+        match self {
+            Metric::Fps => row.fps,
+            Metric::FrameTime => row.median_frame_ms,
+            Metric::Fragments => row.fragments_shaded as f64 / 1e6,
+        }
+    }
+}
+
+/// The unit of a sweep parameter, for the x axis label (`None`: a count or a choice).
+pub fn parameter_unit(name: &str) -> Option<&'static str> {
+    let key = name.rsplit('.').next().unwrap_or(name);
+    match key {
+        "texture_resolution" | "fin_texture_resolution" => Some("texels"),
+        "width" | "height" => Some("pixels"),
+        "time" => Some("s"),
+        "fov_y_deg" => Some("degrees"),
+        _ => None,
+    }
+}
+
+/// Registers the embedded font with plotters once.
+fn register_font() -> Result<(), String> {
+    static DONE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    DONE.get_or_init(|| {
+        plotters::style::register_font(FAMILY, FontStyle::Normal, crate::font::DEJAVU_SANS)
+            .map_err(|_| "the embedded font cannot be read by plotters".to_string())
+    })
+    .clone()
+}
+
+/// [`metric_plot`] of frames per second (`fps.png`).
+pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> {
+    metric_plot(parameters, rows, Metric::Fps).ok().flatten()
+}
+
+/// Plots `metric` against the first parameter that takes more than one value (the first
+/// parameter when none does), so that `--param number_of_spots=2 --param
+/// specular_tangents=1,3` plots against the tangents. Its values are placed by number when
+/// every one is a number, else evenly in point order (ticks labelled with the values). Rows
+/// with the same values of the other parameters form one line, named in the legend under the
+/// plot. `Ok(None)` without rows; an error only if plotters fails to draw.
+pub fn metric_plot(
+    parameters: &[String],
+    rows: &[ResultRow],
+    metric: Metric,
+) -> Result<Option<RgbaImage>, String> {
+    if rows.is_empty() || parameters.is_empty() {
+        return Ok(None);
+    }
+    register_font()?;
     let x_param = (0..parameters.len())
         .find(|&i| rows.iter().any(|r| r.values[i] != rows[0].values[i]))
         .unwrap_or(0);
@@ -46,10 +132,10 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
         })
         .collect();
     // Categories: the distinct values of the axis parameter in order of appearance.
-    let mut categories: Vec<&str> = Vec::new();
+    let mut categories: Vec<String> = Vec::new();
     for r in rows {
-        if !categories.contains(&r.values[x_param].as_str()) {
-            categories.push(&r.values[x_param]);
+        if !categories.contains(&r.values[x_param]) {
+            categories.push(r.values[x_param].clone());
         }
     }
     let xs: Vec<f64> = match &numeric {
@@ -65,160 +151,138 @@ pub fn fps_plot(parameters: &[String], rows: &[ResultRow]) -> Option<RgbaImage> 
             .collect(),
     };
     let (x_min, x_max) = span(&xs);
-    let fps_max = rows
+    let pad = if x_max > x_min {
+        (x_max - x_min) * 0.05
+    } else {
+        0.5
+    };
+    let (x_lo, x_hi) = (x_min - pad, x_max + pad);
+    let y_top = rows
         .iter()
-        .map(|r| r.fps)
+        .map(|r| metric.value(r))
         .filter(|f| f.is_finite())
         .fold(0.0, f64::max);
-    let y_max = nice_ceiling(fps_max.max(1e-3));
-
-    let mut pixmap = Pixmap::new(WIDTH, HEIGHT)?;
-    pixmap.fill(Color::WHITE);
-    let plot_w = WIDTH as f32 - LEFT - RIGHT;
-    let plot_h = HEIGHT as f32 - TOP - BOTTOM;
-    let to_px = |x: f64, y: f64| {
-        let fx = if x_max > x_min {
-            (x - x_min) / (x_max - x_min)
-        } else {
-            0.5
-        };
-        (
-            LEFT + fx as f32 * plot_w,
-            TOP + plot_h - (y / y_max).clamp(0.0, 1.0) as f32 * plot_h,
-        )
-    };
-    // Grid and axes.
-    let grid = paint([225, 225, 225]);
-    let axis = paint([60, 60, 60]);
-    for k in 0..=5 {
-        let y = TOP + plot_h * k as f32 / 5.0;
-        line(&mut pixmap, (LEFT, y), (LEFT + plot_w, y), &grid, 1.0);
-    }
-    line(&mut pixmap, (LEFT, TOP), (LEFT, TOP + plot_h), &axis, 1.5);
-    line(
-        &mut pixmap,
-        (LEFT, TOP + plot_h),
-        (LEFT + plot_w, TOP + plot_h),
-        &axis,
-        1.5,
-    );
+    let y_hi = nice_ceiling(y_top.max(1e-3));
 
     // Series: rows grouped by the values of the other parameters, in order of appearance.
     let mut series: Vec<Series> = Vec::new();
     for (r, &x) in rows.iter().zip(&xs) {
         let key = others(&r.values, x_param);
+        let y = metric.value(r);
         match series.iter_mut().find(|(k, _)| *k == key) {
-            Some((_, points)) => points.push((x, r.fps)),
-            None => series.push((key, vec![(x, r.fps)])),
+            Some((_, points)) => points.push((x, y)),
+            None => series.push((key, vec![(x, y)])),
         }
     }
-    for (i, (_, points)) in series.iter_mut().enumerate() {
+    for (_, points) in &mut series {
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let colour = paint(PALETTE[i % PALETTE.len()]);
-        let mut path = PathBuilder::new();
-        for (k, &(x, y)) in points.iter().enumerate() {
-            let (px, py) = to_px(x, y);
-            if k == 0 {
-                path.move_to(px, py);
-            } else {
-                path.line_to(px, py);
-            }
-        }
-        if let Some(path) = path.finish() {
-            let stroke = Stroke {
-                width: 2.0,
-                ..Stroke::default()
-            };
-            pixmap.stroke_path(&path, &colour, &stroke, Transform::identity(), None);
-        }
-        for &(x, y) in points.iter() {
-            let (px, py) = to_px(x, y);
-            if let Some(dot) = PathBuilder::from_circle(px, py, 3.5) {
-                pixmap.fill_path(
-                    &dot,
-                    &colour,
-                    Default::default(),
-                    Transform::identity(),
-                    None,
-                );
-            }
-        }
     }
-
-    let mut image = RgbaImage::from_raw(WIDTH, HEIGHT, pixmap.data().to_vec())?;
-    // Labels: y ticks, x ticks, axis titles, legend.
-    for k in 0..=5 {
-        let value = y_max * k as f64 / 5.0;
-        let label = format_number(value);
-        let y = TOP + plot_h - plot_h * k as f32 / 5.0;
-        let x = LEFT as i64 - 6 - text::text_width(&label) as i64;
-        text::draw(&mut image, x, y as i64 - 3, &label, INK);
-    }
-    let ticks: Vec<(f64, String)> = match &numeric {
-        Some(_) => {
-            let mut seen: Vec<(f64, String)> = Vec::new();
-            for (r, &x) in rows.iter().zip(&xs) {
-                if !seen.iter().any(|(v, _)| *v == x) {
-                    seen.push((x, r.values[x_param].clone()));
-                }
-            }
-            seen
-        }
-        None => categories
-            .iter()
-            .enumerate()
-            .map(|(i, c)| (i as f64, c.to_string()))
-            .collect(),
+    let other_names = others(parameters, x_param);
+    let legend_lines = series.len().min(LEGEND_ROWS) + usize::from(series.len() > LEGEND_ROWS);
+    let legend_height = 16 + 20 * legend_lines as u32;
+    let x_label = match parameter_unit(&parameters[x_param]) {
+        Some(unit) => format!("{} ({unit})", parameters[x_param]),
+        None => parameters[x_param].clone(),
     };
-    // Tick labels that would overlap the previous one are skipped.
-    let mut last_right = i64::MIN;
-    let mut sorted_ticks = ticks;
-    sorted_ticks.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for (x, label) in &sorted_ticks {
-        let (px, _) = to_px(*x, 0.0);
-        let w = text::text_width(label) as i64;
-        let left = px as i64 - w / 2;
-        if left > last_right + 4 {
-            text::draw(&mut image, left, (TOP + plot_h) as i64 + 8, label, INK);
-            last_right = left + w;
-        }
-    }
-    let x_title = &parameters[x_param];
-    let x_title_w = text::text_width(x_title) as i64;
-    text::draw(
-        &mut image,
-        (LEFT + plot_w / 2.0) as i64 - x_title_w / 2,
-        HEIGHT as i64 - 24,
-        x_title,
-        INK,
-    );
-    text::draw(&mut image, 8, 14, "FPS", INK);
-    if series.len() > 1 {
-        for (i, (key, _)) in series.iter().enumerate() {
-            let label: Vec<String> = others(parameters, x_param)
-                .iter()
-                .zip(key)
-                .map(|(n, v)| format!("{n}={v}"))
-                .collect();
-            let label = label.join(" ");
-            let y = TOP as i64 + 4 + i as i64 * text::LINE_HEIGHT as i64;
-            let x = (LEFT + plot_w) as i64 - 12 - text::text_width(&label) as i64;
-            let [r, g, b] = PALETTE[i % PALETTE.len()];
-            for dy in 0..5 {
-                for dx in 0..8 {
-                    let (px, py) = (x - 12 + dx, y + 1 + dy);
-                    if px >= 0 && py >= 0 {
-                        image.put_pixel(px as u32, py as u32, image::Rgba([r, g, b, 255]));
-                    }
-                }
+
+    let mut buffer = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
+    {
+        let draw_error = |e: &dyn std::fmt::Display| format!("plot: {e}");
+        let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| draw_error(&e))?;
+        let (upper, lower) = root.split_vertically(HEIGHT - legend_height);
+        let title = format!("{} against {}", metric.title(), parameters[x_param]);
+        let mut chart = ChartBuilder::on(&upper)
+            .caption(title, (FAMILY, 24))
+            .margin(14)
+            .x_label_area_size(54)
+            .y_label_area_size(84)
+            .build_cartesian_2d(x_lo..x_hi, 0f64..y_hi)
+            .map_err(|e| draw_error(&e))?;
+        let category_label = |x: &f64| -> String {
+            let i = x.round();
+            if (x - i).abs() < 1e-6 && i >= 0.0 {
+                categories.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
             }
-            text::draw(&mut image, x, y, &label, INK);
+        };
+        let y_label = |y: &f64| format_tick(*y, y_hi / 40.0);
+        let x_span = (x_hi - x_lo).max(1e-9);
+        let number_label = |x: &f64| format_tick(*x, x_span / 40.0);
+        let mut mesh = chart.configure_mesh();
+        mesh.x_desc(x_label.as_str())
+            .y_desc(metric.axis_label())
+            .label_style((FAMILY, 14))
+            .axis_desc_style((FAMILY, 16))
+            .y_label_formatter(&y_label)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(215, 215, 215));
+        if numeric.is_none() {
+            mesh.x_labels(categories.len().max(2) * 2 + 1)
+                .x_label_formatter(&category_label);
+        } else {
+            mesh.x_label_formatter(&number_label);
         }
+        mesh.draw().map_err(|e| draw_error(&e))?;
+        for (i, (_, points)) in series.iter().enumerate() {
+            let [r, g, b] = PALETTE[i % PALETTE.len()];
+            let colour = RGBColor(r, g, b);
+            chart
+                .draw_series(LineSeries::new(
+                    points.iter().copied(),
+                    colour.stroke_width(2),
+                ))
+                .map_err(|e| draw_error(&e))?;
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                .map_err(|e| draw_error(&e))?;
+        }
+        // The legend, under the plot: a swatch and the values of the other parameters.
+        let font = (FAMILY, 14).into_font().color(&BLACK);
+        for (i, (key, _)) in series.iter().take(LEGEND_ROWS).enumerate() {
+            let [r, g, b] = PALETTE[i % PALETTE.len()];
+            let y = 8 + 20 * i as i32;
+            lower
+                .draw(&Rectangle::new(
+                    [(98, y + 5), (126, y + 9)],
+                    RGBColor(r, g, b).filled(),
+                ))
+                .map_err(|e| draw_error(&e))?;
+            let label = if other_names.is_empty() {
+                metric.title().to_string()
+            } else {
+                other_names
+                    .iter()
+                    .zip(key)
+                    .map(|(n, v)| format!("{n} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            lower
+                .draw(&Text::new(label, (134, y), font.clone()))
+                .map_err(|e| draw_error(&e))?;
+        }
+        if series.len() > LEGEND_ROWS {
+            let y = 8 + 20 * LEGEND_ROWS as i32;
+            lower
+                .draw(&Text::new(
+                    format!("… and {} more lines", series.len() - LEGEND_ROWS),
+                    (134, y),
+                    font.clone(),
+                ))
+                .map_err(|e| draw_error(&e))?;
+        }
+        root.present().map_err(|e| draw_error(&e))?;
     }
-    Some(image)
+    let rgba: Vec<u8> = buffer
+        .chunks_exact(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    Ok(RgbaImage::from_raw(WIDTH, HEIGHT, rgba))
 }
 
-/// The values of the other parameters, and the (x, fps) points with those values.
+/// The values of the other parameters, and the (x, y) points with those values.
 type Series = (Vec<String>, Vec<(f64, f64)>);
 
 /// All of `items` but the one at `axis`, in order.
@@ -229,26 +293,6 @@ fn others(items: &[String], axis: usize) -> Vec<String> {
         .filter(|&(i, _)| i != axis)
         .map(|(_, v)| v.clone())
         .collect()
-}
-
-fn paint(rgb: [u8; 3]) -> Paint<'static> {
-    let mut p = Paint::default();
-    p.set_color_rgba8(rgb[0], rgb[1], rgb[2], 255);
-    p.anti_alias = true;
-    p
-}
-
-fn line(pixmap: &mut Pixmap, from: (f32, f32), to: (f32, f32), paint: &Paint, width: f32) {
-    let mut path = PathBuilder::new();
-    path.move_to(from.0, from.1);
-    path.line_to(to.0, to.1);
-    if let Some(path) = path.finish() {
-        let stroke = Stroke {
-            width,
-            ..Stroke::default()
-        };
-        pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
-    }
 }
 
 fn span(xs: &[f64]) -> (f64, f64) {
@@ -267,14 +311,21 @@ fn nice_ceiling(v: f64) -> f64 {
         .unwrap_or(10.0 * magnitude)
 }
 
-fn format_number(v: f64) -> String {
-    if v == v.round() && v.abs() < 1e9 {
-        format!("{v:.0}")
-    } else if v.abs() >= 0.1 {
-        format!("{v:.1}")
+/// A tick label of `v` with as many decimals as a tick spacing of about `step` needs, trailing
+/// zeros dropped (`0.05`, `1.5`, `20`).
+fn format_tick(v: f64, step: f64) -> String {
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10()).ceil().clamp(0.0, 6.0) as usize
     } else {
-        format!("{v:.3}")
-    }
+        0
+    };
+    let text = format!("{v:.decimals$}");
+    let text = if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    };
+    if text == "-0" { "0".to_string() } else { text }
 }
 
 #[cfg(test)]
@@ -362,6 +413,55 @@ mod tests {
         assert!(left.is_some() && right.is_some(), "{left:?} {right:?}");
         assert!(left < right, "{left:?} {right:?}");
         assert!(coloured_pixels(&image, PALETTE[1]).is_empty());
+    }
+
+    #[test]
+    fn every_metric_is_plotted_with_its_own_scale() {
+        let parameters = vec!["texture_resolution".to_string()];
+        let rows = [row(0, &["64"], 40.0), row(1, &["128"], 10.0)];
+        let plots: Vec<RgbaImage> = Metric::ALL
+            .iter()
+            .map(|&m| {
+                metric_plot(&parameters, &rows, m)
+                    .expect("draws")
+                    .expect("plot")
+            })
+            .collect();
+        // Frame time rises where fps falls: the line's top-most pixel in the left third is
+        // above the right third's for fps, below it for frame time.
+        let top = |image: &RgbaImage, left: bool| {
+            coloured_pixels(image, PALETTE[0])
+                .iter()
+                .filter(|p| {
+                    if left {
+                        p.0 < WIDTH / 3
+                    } else {
+                        p.0 > 2 * WIDTH / 3
+                    }
+                })
+                .filter(|p| p.1 < HEIGHT - 60)
+                .map(|p| p.1)
+                .min()
+        };
+        assert!(top(&plots[0], true) < top(&plots[0], false));
+        assert!(top(&plots[1], true) > top(&plots[1], false));
+        assert_ne!(plots[0], plots[2]);
+        assert_eq!(parameter_unit("fur.texture_resolution"), Some("texels"));
+        // Text is drawn (dark anti-aliased pixels of the title, labels and ticks).
+        let dark = plots[0]
+            .pixels()
+            .filter(|p| p[0] < 80 && p[1] < 80 && p[2] < 80)
+            .count();
+        assert!(dark > 1500, "{dark}");
+    }
+
+    #[test]
+    fn tick_labels_have_the_decimals_their_spacing_needs() {
+        assert_eq!(format_tick(0.45, 0.5 / 40.0), "0.45");
+        assert_eq!(format_tick(0.4, 0.5 / 40.0), "0.4");
+        assert_eq!(format_tick(35.0, 50.0 / 40.0), "35");
+        assert_eq!(format_tick(0.025, 0.25 / 40.0), "0.025");
+        assert_eq!(format_tick(-0.0001, 1.0), "0");
     }
 
     #[test]

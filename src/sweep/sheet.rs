@@ -1,7 +1,8 @@
 //! The contact sheet: every point's render as a thumbnail in a grid, in point order, its
-//! parameter values and frame rate written under it.
+//! label (the parameter values that differ between points, and the frame rate) written under it
+//! in the embedded font ([`crate::font`]).
 
-use crate::text;
+use crate::font;
 use image::{RgbaImage, imageops};
 use std::borrow::Cow;
 
@@ -9,7 +10,14 @@ use std::borrow::Cow;
 pub const THUMBNAIL_WIDTH: u32 = 320;
 const GAP: u32 = 8;
 const BACKGROUND: [u8; 4] = [24, 24, 28, 255];
-const INK: [u8; 4] = [235, 235, 235, 255];
+const INK: [u8; 3] = [235, 235, 235];
+/// Label text size, pixels.
+const TEXT_PX: f32 = 14.0;
+
+/// Height of one label line, pixels.
+pub fn label_line_height() -> u32 {
+    font::line_height(TEXT_PX).ceil() as u32 + 1
+}
 
 /// Where the cells of a contact sheet go: `columns × rows` cells of a thumbnail
 /// `thumbnail_width` wide (the widest render, at most [`THUMBNAIL_WIDTH`]) and at most
@@ -57,7 +65,7 @@ impl SheetLayout {
             thumbnail_width,
             thumbnail_height,
             label_height: lines
-                .saturating_mul(text::LINE_HEIGHT as u32)
+                .saturating_mul(label_line_height())
                 .saturating_add(4),
         })
     }
@@ -120,12 +128,13 @@ pub fn contact_sheet(cells: &[(RgbaImage, Vec<String>)]) -> Option<RgbaImage> {
         let thumb = layout.thumbnail(render);
         imageops::replace(&mut sheet, thumb.as_ref(), i64::from(x), i64::from(y));
         for (k, line) in label.iter().enumerate() {
-            text::draw(
+            font::draw(
                 &mut sheet,
-                x as i64,
-                (y + layout.thumbnail_height + 3 + k as u32 * text::LINE_HEIGHT as u32) as i64,
-                line,
+                x as f32,
+                (y + layout.thumbnail_height + 3 + k as u32 * label_line_height()) as f32,
+                TEXT_PX,
                 INK,
+                line,
             );
         }
     }
@@ -155,7 +164,7 @@ mod tests {
             .collect();
         let sheet = contact_sheet(&cells).expect("sheet");
         // Three cells: two columns, two rows of 320×240 thumbnails.
-        let cell_h = 240 + text::LINE_HEIGHT as u32 + 4 + GAP;
+        let cell_h = 240 + label_line_height() + 4 + GAP;
         assert_eq!(sheet.width(), 2 * (320 + GAP) + GAP);
         assert_eq!(sheet.height(), 2 * cell_h + GAP);
         let centre = |i: u32| {
@@ -166,8 +175,8 @@ mod tests {
             assert_eq!(centre(i as u32).0, *c);
         }
         // The label is drawn under the first thumbnail.
-        let label_row = (GAP + 240 + 3..GAP + 240 + 3 + 7)
-            .any(|y| (GAP..GAP + 30).any(|x| sheet.get_pixel(x, y).0 == INK));
+        let label_row = (GAP + 240 + 3..GAP + 240 + 3 + label_line_height())
+            .any(|y| (GAP..GAP + 30).any(|x| sheet.get_pixel(x, y)[0] > 180));
         assert!(label_row);
         assert!(contact_sheet(&[]).is_none());
         // Thumbnails made first give the same sheet, and the layout knows its size.

@@ -1,11 +1,14 @@
 //! The viewer's status line and key list, drawn straight into the window's `0x00RRGGBB` buffer
-//! with the library's 5×7 font ([`pelage::text`]), each font pixel a `scale`² block.
+//! in the library's embedded font ([`pelage::font`], DejaVu Sans, anti-aliased), mixed case.
 
-pub use pelage::text::{ADVANCE, GLYPH_WIDTH, LINE_HEIGHT, glyph};
+/// Width in window pixels of `text` at `px` pixels.
+pub fn text_width(text: &str, px: f32) -> usize {
+    pelage::font::text_width(text, px).ceil() as usize
+}
 
-/// Width in window pixels of `text` drawn at `scale`.
-pub fn text_width(text: &str, scale: usize) -> usize {
-    text.chars().count() * ADVANCE * scale
+/// Height in window pixels of one line of text at `px` pixels, with a little leading.
+pub fn line_height(px: f32) -> usize {
+    pelage::font::line_height(px).ceil() as usize + 2
 }
 
 /// A `0x00RRGGBB` window buffer.
@@ -32,27 +35,23 @@ impl Canvas<'_> {
         }
     }
 
-    /// Draws `text` with its top-left corner at (`x`, `y`), each font pixel a `scale`² block of
-    /// `colour`. Clipped to the canvas.
-    pub fn text(&mut self, x: usize, y: usize, text: &str, scale: usize, colour: u32) {
-        for (i, c) in text.chars().enumerate() {
-            let left = x + i * ADVANCE * scale;
-            for (r, bits) in glyph(c).iter().enumerate() {
-                for col in 0..GLYPH_WIDTH {
-                    if bits & (0x10 >> col) == 0 {
-                        continue;
-                    }
-                    for dy in 0..scale {
-                        for dx in 0..scale {
-                            let (px, py) = (left + col * scale + dx, y + r * scale + dy);
-                            if px < self.width && py < self.height {
-                                self.pixels[py * self.width + px] = colour;
-                            }
-                        }
-                    }
-                }
+    /// Draws `text` with its top-left corner at (`x`, `y`) at `px` pixels in `colour`, blended
+    /// by the glyphs' coverage. Clipped to the canvas.
+    pub fn text(&mut self, x: usize, y: usize, text: &str, px: f32, colour: u32) {
+        let (width, height) = (self.width, self.height);
+        let pixels = &mut *self.pixels;
+        pelage::font::rasterise(text, x as f32, y as f32, px, |gx, gy, coverage| {
+            let (gx, gy) = (gx as usize, gy as usize);
+            if gx < width && gy < height {
+                let p = &mut pixels[gy * width + gx];
+                let mix = |shift: u32| {
+                    let under = ((*p >> shift) & 0xFF) as f32;
+                    let over = ((colour >> shift) & 0xFF) as f32;
+                    ((under + (over - under) * coverage).round() as u32).min(255) << shift
+                };
+                *p = mix(16) | mix(8) | mix(0);
             }
-        }
+        });
     }
 }
 
@@ -61,28 +60,42 @@ mod tests {
     use super::*;
 
     #[test]
-    fn text_sets_exactly_the_glyph_pixels_and_clips() {
-        let mut pixels = vec![0u32; 12 * 8];
+    fn text_is_drawn_in_the_real_font_and_clipped() {
+        let (w, h) = (120, 24);
+        let mut pixels = vec![0u32; w * h];
         let mut canvas = Canvas {
             pixels: &mut pixels,
-            width: 12,
-            height: 8,
+            width: w,
+            height: h,
         };
-        canvas.text(0, 0, "L1", 1, 0xFFFFFF);
-        // 'L': the left column and the bottom row; '1' starts six pixels to the right.
-        let lit = |x: usize, y: usize| pixels[y * 12 + x] != 0;
-        assert!((0..7).all(|y| lit(0, y)));
-        assert!((0..5).all(|x| lit(x, 6)));
-        assert!(!lit(1, 0) && !lit(5, 6));
-        assert!(lit(8, 0) && lit(7, 1));
-        // Drawing past the edges writes nothing out of bounds.
+        canvas.text(2, 2, "3.99 s", 14.0, 0x00FFFFFF);
+        let lit: Vec<usize> = (0..w * h).filter(|&i| pixels[i] != 0).collect();
+        assert!(lit.len() > 40, "{}", lit.len());
+        // Anti-aliased: some pixels partly covered (grey), some fully (white).
+        assert!(pixels.contains(&0x00FFFFFF));
+        assert!(pixels.iter().any(|&p| p != 0 && p != 0x00FFFFFF));
+        let right = lit.iter().map(|i| i % w).max().unwrap_or(0);
+        assert!(right <= 2 + text_width("3.99 s", 14.0), "{right}");
+        // "s" and "5" differ (the bitmap font drew lower case as capitals: "3.99S").
+        let draw = |t: &str| {
+            let mut px = vec![0u32; 20 * 20];
+            let mut c = Canvas {
+                pixels: &mut px,
+                width: 20,
+                height: 20,
+            };
+            c.text(1, 1, t, 14.0, 0x00FFFFFF);
+            px
+        };
+        assert_ne!(draw("s"), draw("5"));
+        assert_ne!(draw("s"), draw("S"));
+        // Past the edges: nothing out of bounds.
         let mut canvas = Canvas {
             pixels: &mut pixels,
-            width: 12,
-            height: 8,
+            width: w,
+            height: h,
         };
-        canvas.text(10, 5, "WW", 2, 1);
-        assert_eq!(text_width("WW", 2), 24);
+        canvas.text(110, 18, "WWWW", 20.0, 1);
     }
 
     #[test]

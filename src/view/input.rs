@@ -41,6 +41,13 @@ pub enum Action {
     ResetBurn,
     /// Spots and stripes on or off.
     ToggleSpots,
+    /// Level of detail (`[lod]`: fewer shells as the fur gets small) on or off.
+    ToggleLod,
+    /// Gravity (`[gravity]`: the fur hangs) on or off.
+    ToggleGravity,
+    /// The scene's surface maps (`[maps]`: length, density, direction, colour) on or off
+    /// (rebakes).
+    ToggleMaps,
     /// Change the number of shells by this much (rebakes).
     Shells(i32),
     /// Double (+1) or halve (−1) the shell texture resolution (rebakes).
@@ -61,21 +68,27 @@ pub enum Action {
 
 /// The key list shown by `h` and printed in the README: keys, then what they do.
 pub const KEYS: &[(&str, &str)] = &[
-    ("LEFT DRAG / ARROWS", "orbit"),
-    ("RIGHT DRAG / SHIFT+ARROWS", "pan"),
-    ("WHEEL / + -", "zoom"),
-    ("R / HOME", "reset the camera"),
+    ("Left drag, arrows", "orbit"),
+    ("Right drag, Shift + arrows", "pan"),
+    ("Wheel, + −", "zoom"),
+    ("R, Home", "reset the camera"),
     ("W", "wind on/off"),
     ("B / N", "start burning now / put the fire out"),
     ("S", "spots and stripes on/off"),
-    ("[ ]  (SHIFT: 10)", "fewer/more shells (rebakes)"),
+    ("L", "level of detail on/off"),
+    ("G", "gravity on/off"),
+    ("M", "surface maps on/off (rebakes)"),
+    ("[ ]  (Shift: by 10)", "fewer/more shells (rebakes)"),
     (", .", "halve/double texture resolution (rebakes)"),
-    ("V / SHIFT+V", "debug view: none, tangents, alpha, shadow"),
-    ("SPACE", "pause/run time"),
-    ("T / BACKSPACE", "back to the scene's time"),
-    ("P / F12", "screenshot: full-resolution PNG + scene TOML"),
-    ("H / F1", "this key list"),
-    ("Q / ESC", "quit"),
+    (
+        "V, Shift + V",
+        "debug view: shaded, tangents, alpha, shadow",
+    ),
+    ("Space", "pause/run time"),
+    ("T, Backspace", "back to the scene's time"),
+    ("P, F12", "screenshot: full-resolution PNG + scene TOML"),
+    ("H, F1", "this key list"),
+    ("Q, Esc", "quit"),
 ];
 
 /// The action of a key press. `shift`: a shift key is held; `repeated`: the press is the
@@ -134,6 +147,9 @@ pub fn key_action(key: Key, shift: bool, repeated: bool) -> Option<Action> {
         Key::B => Some(Action::StartBurn),
         Key::N => Some(Action::ResetBurn),
         Key::S => Some(Action::ToggleSpots),
+        Key::L => Some(Action::ToggleLod),
+        Key::G => Some(Action::ToggleGravity),
+        Key::M => Some(Action::ToggleMaps),
         Key::V => Some(Action::DebugView(if shift { -1 } else { 1 })),
         Key::Space => Some(Action::TogglePause),
         Key::T | Key::Backspace => Some(Action::RestartTime),
@@ -141,6 +157,45 @@ pub fn key_action(key: Key, shift: bool, repeated: bool) -> Option<Action> {
         Key::H | Key::F1 => Some(Action::ToggleHelp),
         Key::Q | Key::Escape => Some(Action::Quit),
         _ => None,
+    }
+}
+
+/// Key events in the order the window system delivered them → actions. Every press is acted
+/// on, however short (a tap pressed and released between two frames still counts); a press of
+/// a key already held is the keyboard's auto-repeat (X11 reports repeats as presses without
+/// releases), which repeats continuous actions but never flips a toggle twice. Shift is the
+/// state of the shift keys at the moment of the press.
+#[derive(Clone, Debug, Default)]
+pub struct KeyTracker {
+    held: Vec<Key>,
+}
+
+impl KeyTracker {
+    /// The action of one event: `down` a press, else a release.
+    pub fn event(&mut self, key: Key, down: bool) -> Option<Action> {
+        if !down {
+            self.held.retain(|k| *k != key);
+            return None;
+        }
+        let repeated = self.held.contains(&key);
+        if !repeated {
+            self.held.push(key);
+        }
+        let shift = self.held.contains(&Key::LeftShift) || self.held.contains(&Key::RightShift);
+        key_action(key, shift, repeated)
+    }
+
+    /// The actions of a batch of events, in order.
+    pub fn events(&mut self, events: impl IntoIterator<Item = (Key, bool)>) -> Vec<Action> {
+        events
+            .into_iter()
+            .filter_map(|(key, down)| self.event(key, down))
+            .collect()
+    }
+
+    /// Forgets every held key (the window lost focus: releases may never come).
+    pub fn clear(&mut self) {
+        self.held.clear();
     }
 }
 
@@ -242,6 +297,13 @@ mod tests {
         );
         assert_eq!(key_action(Key::V, true, false), Some(Action::DebugView(-1)));
         assert_eq!(key_action(Key::Z, false, false), None);
+        assert_eq!(key_action(Key::L, false, false), Some(Action::ToggleLod));
+        assert_eq!(
+            key_action(Key::G, false, false),
+            Some(Action::ToggleGravity)
+        );
+        assert_eq!(key_action(Key::M, false, false), Some(Action::ToggleMaps));
+        assert_eq!(key_action(Key::M, false, true), None);
         assert!(KEYS.iter().all(|(k, d)| !k.is_empty() && !d.is_empty()));
     }
 
@@ -272,5 +334,56 @@ mod tests {
         };
         assert!((f - 1.0 / ZOOM_STEP).abs() < 1e-6);
         assert_eq!(wheel_action(0.0), None);
+    }
+
+    #[test]
+    fn a_tap_between_two_frames_is_never_lost() {
+        // Pressed and released before the next frame polls: one toggle, acted on.
+        let mut keys = KeyTracker::default();
+        let actions = keys.events([(Key::W, true), (Key::W, false)]);
+        assert_eq!(actions, vec![Action::ToggleWind]);
+        // Two taps in one frame: two toggles (wind back off).
+        let actions = keys.events([
+            (Key::W, true),
+            (Key::W, false),
+            (Key::W, true),
+            (Key::W, false),
+        ]);
+        assert_eq!(actions, vec![Action::ToggleWind, Action::ToggleWind]);
+    }
+
+    #[test]
+    fn auto_repeat_repeats_moves_but_not_toggles_and_shift_is_read_at_the_press() {
+        let mut keys = KeyTracker::default();
+        // Held W: the repeats (presses without a release) flip nothing.
+        let actions = keys.events([(Key::W, true), (Key::W, true), (Key::W, true)]);
+        assert_eq!(actions, vec![Action::ToggleWind]);
+        // Held Left: every repeat orbits.
+        let actions = keys.events([(Key::Left, true), (Key::Left, true), (Key::Left, false)]);
+        assert_eq!(actions.len(), 2);
+        // Shift pressed, an arrow tapped, shift released in one frame: a pan.
+        let actions = keys.events([
+            (Key::LeftShift, true),
+            (Key::Up, true),
+            (Key::Up, false),
+            (Key::LeftShift, false),
+            (Key::Up, true),
+        ]);
+        assert_eq!(
+            actions,
+            vec![
+                Action::Pan {
+                    dx: 0.0,
+                    dy: -PAN_STEP
+                },
+                Action::Orbit {
+                    yaw: 0.0,
+                    pitch: ORBIT_STEP
+                }
+            ]
+        );
+        // After focus is lost, the next press of a held key is fresh again.
+        keys.clear();
+        assert_eq!(keys.event(Key::W, true), Some(Action::ToggleWind));
     }
 }

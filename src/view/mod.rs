@@ -28,16 +28,16 @@ pub use state::ViewLimits;
 
 use crate::cli::Failure;
 use font::Canvas;
-use input::{Action, Drag};
-use minifb::{Key, KeyRepeat, MouseButton, MouseMode, Window, WindowOptions};
+use input::{Action, Drag, KeyTracker};
+use minifb::{InputCallback, Key, MouseButton, MouseMode, Window, WindowOptions};
 use pelage::scene::Scene;
 use rayon::ThreadPool;
 use schedule::Pace;
 use state::{ViewState, same_bake};
 use std::collections::VecDeque;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use worker::{Bake, Event, Frame, Job, Worker};
 
@@ -87,13 +87,82 @@ fn pool(threads: Option<u32>, name: &'static str) -> Result<Arc<ThreadPool>, Fai
         .map_err(|e| Failure::other(format!("cannot start worker threads: {e}")))
 }
 
+/// The size of the X screen the window opens on (`PELAGE_VIEW_SCREEN=WxH` stands in for it:
+/// for trying a small screen); `None` when it cannot be read (the window is then image-sized).
+/// The connection comes back too, to be closed only once the window is open: an X server with
+/// no client left resets (Xvfb does), and a window opened during the reset fails.
+fn screen_size() -> Option<(
+    (usize, usize),
+    Option<x11rb::rust_connection::RustConnection>,
+)> {
+    if let Ok(text) = std::env::var("PELAGE_VIEW_SCREEN") {
+        let (w, h) = text.split_once('x')?;
+        return Some(((w.trim().parse().ok()?, h.trim().parse().ok()?), None));
+    }
+    let (connection, number) = x11rb::connect(None).ok()?;
+    let screen = x11rb::connection::Connection::setup(&connection)
+        .roots
+        .get(number)?;
+    let size = (
+        usize::from(screen.width_in_pixels),
+        usize::from(screen.height_in_pixels),
+    );
+    Some((size, Some(connection)))
+}
+
+/// Room left on the screen for the window's frame and title bar and a desktop panel, pixels.
+const SCREEN_MARGIN: (usize, usize) = (40, 80);
+
+/// The window size for an image of `width` × `height` on a `screen`: the image's size when it
+/// fits (less [`SCREEN_MARGIN`]), else scaled down to fit, keeping its aspect. The image is
+/// still rendered at its own size; only the window shows it smaller.
+pub fn fit_window(width: usize, height: usize, screen: Option<(usize, usize)>) -> (usize, usize) {
+    let Some((sw, sh)) = screen else {
+        return (width, height);
+    };
+    let (room_w, room_h) = (
+        sw.saturating_sub(SCREEN_MARGIN.0).max(64),
+        sh.saturating_sub(SCREEN_MARGIN.1).max(64),
+    );
+    if width <= room_w && height <= room_h {
+        return (width, height);
+    }
+    let scale = (room_w as f64 / width as f64).min(room_h as f64 / height as f64);
+    (
+        ((width as f64 * scale).floor() as usize).max(1),
+        ((height as f64 * scale).floor() as usize).max(1),
+    )
+}
+
+/// Key presses and releases as the window system delivers them (minifb's input callback), for
+/// [`KeyTracker`]: a tap shorter than a frame is still seen.
+struct KeyEvents(Arc<Mutex<Vec<(Key, bool)>>>);
+
+impl InputCallback for KeyEvents {
+    fn add_char(&mut self, _: u32) {}
+
+    fn set_key_state(&mut self, key: Key, down: bool) {
+        if let Ok(mut events) = self.0.lock() {
+            events.push((key, down));
+        }
+    }
+}
+
 /// Opens the window on `scene` and runs until it is closed (or for `options.frames` frames).
 pub fn run(scene: Scene, options: Options) -> Result<(), Failure> {
     let display = display()?;
-    let (width, height) = (scene.image.width as usize, scene.image.height as usize);
+    let screen = screen_size();
+    let (width, height) = fit_window(
+        scene.image.width as usize,
+        scene.image.height as usize,
+        screen.as_ref().map(|s| s.0),
+    );
     let mut window = Window::new(&options.title, width, height, WindowOptions::default())
         .map_err(|e| Failure::other(format!("cannot open a window on display {display}: {e}")))?;
-    let mut viewer = Viewer::new(scene, options)?;
+    drop(screen);
+    let key_events = Arc::new(Mutex::new(Vec::new()));
+    window.set_input_callback(Box::new(KeyEvents(Arc::clone(&key_events))));
+    let mut viewer = Viewer::new(scene, options, (width, height), key_events)?;
     match viewer.options.frames {
         Some(n) => viewer.run_frames(&mut window, n),
         None => viewer.run_interactive(&mut window),
@@ -136,11 +205,20 @@ struct Viewer {
     message: Option<(String, Instant)>,
     shots_in_flight: usize,
     shots_taken: u32,
+    /// Key events since the last frame, from the window's input callback.
+    key_events: Arc<Mutex<Vec<(Key, bool)>>>,
+    keys: KeyTracker,
+    /// Whether the window had the focus at the last frame.
+    was_active: bool,
 }
 
 impl Viewer {
-    fn new(scene: Scene, options: Options) -> Result<Self, Failure> {
-        let (width, height) = (scene.image.width as usize, scene.image.height as usize);
+    fn new(
+        scene: Scene,
+        options: Options,
+        (width, height): (usize, usize),
+        key_events: Arc<Mutex<Vec<(Key, bool)>>>,
+    ) -> Result<Self, Failure> {
         let preview_pool = pool(options.threads, "preview")?;
         let refine_pool = pool(options.threads, "refine")?;
         let (sender, events) = channel();
@@ -182,6 +260,9 @@ impl Viewer {
             message: None,
             shots_in_flight: 0,
             shots_taken: 0,
+            key_events,
+            keys: KeyTracker::default(),
+            was_active: false,
         };
         viewer.bake_if_needed()?;
         Ok(viewer)
@@ -408,20 +489,15 @@ impl Viewer {
     /// The window's pixels: the shown frame, the status line and the key list.
     fn compose(&mut self) {
         self.buffer.copy_from_slice(&self.base);
-        let fps = self.rate();
-        let scale = if self.width >= 1200 { 2 } else { 1 };
+        let arriving = self.rate() > 0.0;
+        let px = if self.width >= 1200 { 22.0 } else { 14.0 };
         let mut lines = Vec::new();
         let first = match &self.shown {
             Some(s) => {
                 let (w, h) = (s.frame.image.width, s.frame.image.height);
-                let rate = if fps > 0.0 {
-                    format!("{fps:.0} fps")
-                } else {
-                    "still".to_string()
-                };
+                let rate = rate_text(s.frame.ms, arriving);
                 format!(
-                    "{rate}  {:.0} ms  1/{} {w}x{h}{}",
-                    s.frame.ms,
+                    "{rate}  at 1/{} size, {w}×{h}{}",
                     s.frame.divisor,
                     if s.at.elapsed() < Duration::from_millis(300) && s.frame.step > 0 {
                         " refined"
@@ -430,16 +506,20 @@ impl Viewer {
                     }
                 )
             }
-            None => "baking fur textures...".to_string(),
+            None => "Baking fur textures…".to_string(),
         };
         let baking = self.baking.as_ref().map(|s| {
             format!(
-                "  baking {} shells of {}...",
+                "  baking {} shells of {}…",
                 s.fur.number_of_shells, s.fur.texture_resolution
             )
         });
-        lines.push(format!("{first}{}  h: keys", baking.unwrap_or_default()));
-        lines.push(self.state.describe());
+        lines.push(format!("{first}{}  H: keys", baking.unwrap_or_default()));
+        lines.extend(wrap(
+            &self.state.describe(),
+            px,
+            self.width.saturating_sub(8),
+        ));
         if let Some((m, at)) = &self.message
             && at.elapsed() < Duration::from_secs(5)
         {
@@ -450,17 +530,12 @@ impl Viewer {
             width: self.width,
             height: self.height,
         };
-        draw_lines(&mut canvas, 0, &lines, scale);
+        draw_lines(&mut canvas, 0, &lines, px);
         if self.help {
-            let mut help = vec!["KEYS".to_string()];
-            let keys_width = input::KEYS.iter().map(|(k, _)| k.len()).max().unwrap_or(0);
-            help.extend(
-                input::KEYS
-                    .iter()
-                    .map(|(k, d)| format!("{k:<keys_width$}  {d}")),
-            );
-            let top = (lines.len() + 1) * font::LINE_HEIGHT * scale;
-            draw_lines(&mut canvas, top, &help, scale);
+            let mut help = vec!["Keys".to_string()];
+            help.extend(input::KEYS.iter().map(|(k, d)| format!("{k}:  {d}")));
+            let top = (lines.len() + 1) * font::line_height(px);
+            draw_lines(&mut canvas, top, &help, px);
         }
     }
 
@@ -472,13 +547,18 @@ impl Viewer {
     }
 
     /// The actions of this frame's keys and mouse.
-    fn input(&self, window: &Window, drag: &mut Option<(Drag, (f32, f32))>) -> Vec<Action> {
-        let mut actions = Vec::new();
-        let shift = window.is_key_down(Key::LeftShift) || window.is_key_down(Key::RightShift);
-        let fresh = window.get_keys_pressed(KeyRepeat::No);
-        for key in window.get_keys_pressed(KeyRepeat::Yes) {
-            actions.extend(input::key_action(key, shift, !fresh.contains(&key)));
+    fn input(&mut self, window: &Window, drag: &mut Option<(Drag, (f32, f32))>) -> Vec<Action> {
+        let events = match self.key_events.lock() {
+            Ok(mut events) => std::mem::take(&mut *events),
+            Err(_) => Vec::new(),
+        };
+        // Focus lost: releases may never come, so no key counts as held any more.
+        let active = window.is_active();
+        if self.was_active && !active {
+            self.keys.clear();
         }
+        self.was_active = active;
+        let mut actions = self.keys.events(events);
         let held = if window.get_mouse_down(MouseButton::Left) {
             Some(Drag::Orbit)
         } else if window.get_mouse_down(MouseButton::Right)
@@ -609,19 +689,51 @@ impl Viewer {
     }
 }
 
-/// Lines of text at the top-left from row `top`, over a darkened backdrop.
-fn draw_lines(canvas: &mut Canvas, top: usize, lines: &[String], scale: usize) {
-    let pad = 2 * scale;
+/// Lines of text at the top-left from row `top` at `px` pixels, over a darkened backdrop.
+fn draw_lines(canvas: &mut Canvas, top: usize, lines: &[String], px: f32) {
+    let pad = 4;
     let width = lines
         .iter()
-        .map(|l| font::text_width(l, scale))
+        .map(|l| font::text_width(l, px))
         .max()
         .unwrap_or(0);
-    let height = lines.len() * font::LINE_HEIGHT * scale;
+    let line = font::line_height(px);
+    let height = lines.len() * line;
     canvas.darken(0, top, width + 2 * pad, height + pad, 90);
-    for (i, line) in lines.iter().enumerate() {
-        let y = top + pad + i * font::LINE_HEIGHT * scale;
-        canvas.text(pad, y, line, scale, 0x00F0F0E8);
+    for (i, text) in lines.iter().enumerate() {
+        let y = top + pad + i * line;
+        canvas.text(pad, y, text, px, 0x00F0F0E8);
+    }
+}
+
+/// `text`'s fields (separated by two spaces) in lines no wider than `width` pixels at `px`
+/// (a field wider than that gets a line of its own).
+fn wrap(text: &str, px: f32, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for field in text.split("  ").filter(|f| !f.is_empty()) {
+        match lines.last_mut() {
+            Some(line) if font::text_width(&format!("{line}  {field}"), px) <= width => {
+                line.push_str("  ");
+                line.push_str(field);
+            }
+            _ => lines.push(field.to_string()),
+        }
+    }
+    lines
+}
+
+/// The frame rate and frame time of the status line: both from the same frame time, so that
+/// they agree (`fps × ms = 1000`); `still` when no new frame arrived in the last second.
+pub fn rate_text(frame_ms: f64, arriving: bool) -> String {
+    if !(frame_ms.is_finite() && frame_ms > 0.0) {
+        return "no frame time yet".to_string();
+    }
+    let fps = 1000.0 / frame_ms;
+    let digits = if fps < 10.0 { 1 } else { 0 };
+    if arriving {
+        format!("{fps:.digits$} fps ({frame_ms:.1} ms a frame)")
+    } else {
+        format!("still; last frame {frame_ms:.1} ms ({fps:.digits$} fps)")
     }
 }
 
@@ -710,5 +822,56 @@ mod tests {
             red(out[2]) > red(out[3]) && red(out[3]) > red(out[4]) && red(out[4]) > red(out[5])
         );
         assert_eq!(red(out[3]) + (out[3] & 0xFF), 255);
+    }
+
+    #[test]
+    fn the_frame_rate_agrees_with_the_frame_time() {
+        for ms in [4.0, 16.7, 33.3, 70.0, 250.0, 1500.0] {
+            let text = rate_text(ms, true);
+            let fps: f64 = text
+                .split(' ')
+                .next()
+                .and_then(|v| v.parse().ok())
+                .expect("a number first");
+            // The shown rate, rounded as shown, is 1000 / the shown time.
+            let shown_ms: f64 = text
+                .split('(')
+                .nth(1)
+                .and_then(|t| t.split(' ').next())
+                .and_then(|v| v.parse().ok())
+                .expect("the time");
+            assert!((fps - 1000.0 / shown_ms).abs() <= 0.5 + 1e-9, "{text}");
+            assert!(text.contains("ms a frame"), "{text}");
+        }
+        assert!(rate_text(40.0, false).starts_with("still"));
+        assert_eq!(rate_text(0.0, true), "no frame time yet");
+    }
+
+    #[test]
+    fn a_window_too_large_for_the_screen_is_scaled_down_keeping_its_aspect() {
+        // 1366×768 on a 1280×800 screen: narrower and shorter than the screen, same shape.
+        let (w, h) = fit_window(1366, 768, Some((1280, 800)));
+        assert!(
+            w <= 1280 - SCREEN_MARGIN.0 && h <= 800 - SCREEN_MARGIN.1,
+            "{w}×{h}"
+        );
+        assert!(
+            ((w as f64 / h as f64) - 1366.0 / 768.0).abs() < 0.01,
+            "{w}×{h}"
+        );
+        // A window that fits keeps the image's size; no screen known: the image's size.
+        assert_eq!(fit_window(640, 480, Some((1280, 800))), (640, 480));
+        assert_eq!(fit_window(4000, 3000, None), (4000, 3000));
+    }
+
+    #[test]
+    fn a_long_status_line_wraps_at_its_fields() {
+        let text = "t 4.88 s  shells 30  texture 128  wind on  burn off  spots off  LOD off";
+        let wide = wrap(text, 14.0, 2000);
+        assert_eq!(wide, vec![text.to_string()]);
+        let narrow = wrap(text, 14.0, 200);
+        assert!(narrow.len() > 1, "{narrow:?}");
+        assert!(narrow.iter().all(|l| font::text_width(l, 14.0) <= 200));
+        assert_eq!(narrow.join("  "), text);
     }
 }

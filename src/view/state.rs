@@ -6,7 +6,8 @@ use super::input::Action;
 use super::orbit;
 use glam::Vec3;
 use pelage::scene::{
-    BurnSettings, DebugView, Scene, SpotKind, SpotSettings, StripeSettings, WindSettings,
+    BurnSettings, DebugView, GravitySettings, LodSettings, MapSettings, Scene, SpotKind,
+    SpotSettings, StripeSettings, WindSettings,
 };
 
 /// The viewer's clock: the scene's own `time` plus the seconds that have run since.
@@ -56,6 +57,9 @@ pub struct ViewState {
     burn: BurnSettings,
     spots: Vec<SpotSettings>,
     stripes: Vec<StripeSettings>,
+    lod: LodSettings,
+    gravity: GravitySettings,
+    maps: MapSettings,
     limits: Option<ViewLimits>,
 }
 
@@ -101,7 +105,11 @@ const DEBUG_VIEWS: [DebugView; 4] = [
 
 /// Whether two scenes bake to the same fur textures (same seed, mesh and fur).
 pub fn same_bake(a: &Scene, b: &Scene) -> bool {
-    a.seed == b.seed && a.mesh == b.mesh && a.fur == b.fur && a.base_dir == b.base_dir
+    a.seed == b.seed
+        && a.mesh == b.mesh
+        && a.fur == b.fur
+        && a.maps == b.maps
+        && a.base_dir == b.base_dir
 }
 
 impl ViewState {
@@ -118,6 +126,9 @@ impl ViewState {
                 example_spots()
             },
             stripes: scene.stripes.clone(),
+            lod: scene.lod.clone().unwrap_or_default(),
+            gravity: scene.gravity.clone().unwrap_or_default(),
+            maps: scene.maps.clone(),
             initial: scene.clone(),
             scene,
             limits: None,
@@ -188,6 +199,33 @@ impl ViewState {
                     self.stripes = std::mem::take(&mut s.stripes);
                 }
             }
+            Action::ToggleLod => {
+                s.lod = match s.lod.take() {
+                    Some(l) => {
+                        self.lod = l;
+                        None
+                    }
+                    None => Some(self.lod.clone()),
+                };
+            }
+            Action::ToggleGravity => {
+                s.gravity = match s.gravity.take() {
+                    Some(g) => {
+                        self.gravity = g;
+                        None
+                    }
+                    None => Some(self.gravity.clone()),
+                };
+            }
+            Action::ToggleMaps => {
+                if !s.maps.is_empty() {
+                    self.maps = std::mem::take(&mut s.maps);
+                } else if self.maps.is_empty() {
+                    note = Some("this scene has no surface maps ([maps])".to_string());
+                } else {
+                    s.maps = self.maps.clone();
+                }
+            }
             Action::Shells(delta) => {
                 s.fur.number_of_shells = s.fur.number_of_shells.saturating_add_signed(delta).max(1);
             }
@@ -231,14 +269,26 @@ impl ViewState {
             DebugView::Shadow => "shadow",
         };
         format!(
-            "t {:.2}s{}  shells {}  tex {}  wind {}  burn {}  spots {}  {view}",
+            "t {:.2} s{}  shells {}  texture {}  wind {}  burn {}  spots {}  LOD {}  gravity {}  \
+             maps {}  {view}",
             self.clock.now(),
-            if self.clock.running() { "" } else { " paused" },
+            if self.clock.running() {
+                ""
+            } else {
+                " (paused)"
+            },
             s.fur.number_of_shells,
             s.fur.texture_resolution,
             on(s.wind.is_some()),
             on(s.burn.is_some()),
             on(!s.spots.is_empty() || !s.stripes.is_empty()),
+            on(s.lod.is_some()),
+            on(s.gravity.is_some()),
+            if s.maps.is_empty() && self.maps.is_empty() {
+                "none"
+            } else {
+                on(!s.maps.is_empty())
+            },
         )
     }
 }
@@ -389,5 +439,38 @@ mod tests {
         s.apply(Action::ResetCamera, 480.0);
         assert_eq!(s.scene.camera, s.initial.camera);
         assert!(s.describe().contains("shells 40"), "{}", s.describe());
+    }
+
+    #[test]
+    fn lod_gravity_and_maps_toggle_and_keep_their_settings() {
+        let mut s = state();
+        assert!(s.scene.lod.is_none() && s.scene.gravity.is_none());
+        s.apply(Action::ToggleLod, 480.0);
+        assert_eq!(s.scene.lod, Some(LodSettings::default()));
+        s.apply(Action::ToggleGravity, 480.0);
+        assert_eq!(s.scene.gravity, Some(GravitySettings::default()));
+        assert!(
+            s.describe().contains("LOD on  gravity on  maps none"),
+            "{}",
+            s.describe()
+        );
+        s.apply(Action::ToggleLod, 480.0);
+        s.apply(Action::ToggleGravity, 480.0);
+        assert!(s.scene.lod.is_none() && s.scene.gravity.is_none());
+        // No maps in the scene: a note, nothing changes.
+        let note = s.apply(Action::ToggleMaps, 480.0).expect("note");
+        assert!(note.contains("no surface maps"), "{note}");
+        // A scene with maps: off (a different bake), then back as they were.
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/painted-length.toml");
+        let scene = Scene::load(std::path::Path::new(path)).expect("scene");
+        assert!(!scene.maps.is_empty());
+        let mut s = ViewState::new(scene, true);
+        let own = s.scene.maps.clone();
+        s.apply(Action::ToggleMaps, 480.0);
+        assert!(s.scene.maps.is_empty());
+        assert!(!same_bake(&s.scene, &s.initial));
+        assert!(s.describe().contains("maps off"));
+        s.apply(Action::ToggleMaps, 480.0);
+        assert_eq!(s.scene.maps, own);
     }
 }
