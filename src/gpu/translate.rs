@@ -213,13 +213,18 @@ pub fn es300_source() -> Result<String, GpuError> {
         }
         source = source.replace(from, &to);
     }
+    without_level_query(&source)
+}
+
+/// `source` with every `textureNumLevels(t)` replaced by the level count of a full mip chain
+/// computed from the size of level 0 (`es300_levels`): GLSL ES (any version) has no level
+/// query, so the ES 3.00 output and wgpu's GL backend draw this. The same count for pelage's
+/// textures, which are uploaded with every level down to 1×1.
+pub fn without_level_query(source: &str) -> Result<String, GpuError> {
     if !source.contains("textureNumLevels(") {
-        return Err(fail(
-            "GLSL ES 3.00 variant",
-            "no textureNumLevels to replace",
-        ));
+        return Err(fail("GLSL ES variant", "no textureNumLevels to replace"));
     }
-    source = source.replace("textureNumLevels(", "es300_levels(");
+    let mut source = source.replace("textureNumLevels(", "es300_levels(");
     source.push_str(ES300_LEVELS);
     Ok(source)
 }
