@@ -853,6 +853,25 @@ impl GpuContext {
     }
 }
 
+/// Waits for `submission` (all work when `None`). wgpu's GL backend turns "no timeout" into
+/// `glClientWaitSync`'s largest, about 2.1 s, which a large frame on llvmpipe can pass: a wait
+/// that times out is repeated (up to ten minutes in all) instead of failing.
+fn wait(device: &wgpu::Device, submission: Option<wgpu::SubmissionIndex>) -> Result<(), GpuError> {
+    for _ in 0..300 {
+        match device.poll(wgpu::PollType::Wait {
+            submission_index: submission.clone(),
+            timeout: None,
+        }) {
+            Ok(_) => return Ok(()),
+            Err(wgpu::PollError::Timeout) => continue,
+            Err(e) => return Err(GpuError::Readback(e.to_string())),
+        }
+    }
+    Err(GpuError::Readback(
+        "the GPU did not finish the frame in ten minutes".into(),
+    ))
+}
+
 /// A fin pass of a frame: vertices, indices, index count, layer bind group.
 type FinDraw = (wgpu::Buffer, wgpu::Buffer, u32, wgpu::BindGroup);
 
@@ -894,12 +913,7 @@ impl GpuFrame<'_> {
         let mut encoder = device.create_command_encoder(&Default::default());
         self.encode_pass(&mut encoder);
         let index = self.context.queue.submit([encoder.finish()]);
-        let waited = device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(index),
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Readback(e.to_string()));
+        let waited = wait(device, Some(index));
         if let Some(e) = pollster::block_on(guard.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
@@ -1010,12 +1024,7 @@ impl GpuFrame<'_> {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = sender.send(r);
         });
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        wait(device, None)?;
         receiver
             .recv()
             .map_err(|e| GpuError::Readback(e.to_string()))?
