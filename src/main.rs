@@ -47,6 +47,9 @@ enum Command {
     Export(ExportArgs),
     /// Show a scene in a window, moving: orbit, toggle effects, tune the fur (h: keys).
     View(ViewArgs),
+    /// List the GPU adapters wgpu finds (feature `gpu`): the indices and names `render
+    /// --backend gpu --adapter` takes.
+    GpuInfo(cli::gpu_render::GpuInfoArgs),
     /// Draw the thesis's strand figures 3.2–3.7 (strand, cones, thickness, slope, shells,
     /// inner and outer part) from the real fur code.
     Diagram(DiagramArgs),
@@ -95,6 +98,8 @@ fn main() -> ExitCode {
         fps: 10.0,
         animation: None,
         backend: cli::render::Backend::Cpu,
+        api: None,
+        adapter: None,
     }));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command {
         Command::Render(args) => cli::render::run(args),
@@ -106,6 +111,7 @@ fn main() -> ExitCode {
         Command::View(args) => cli::view::run(args),
         Command::Diagram(args) => cli::diagram::run(args),
         Command::Completions { shell } => completions(shell),
+        Command::GpuInfo(args) => cli::gpu_render::info(args),
     }));
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -281,3 +281,33 @@ fn every_source_passes_nagas_validator() {
     );
     assert!(translate::parse(&broken).is_err());
 }
+
+#[test]
+fn pelage_export_writes_the_shaders_and_replaces_its_own_folder() {
+    let dir = out_dir("shaders-export");
+    let out = dir.join("export");
+    for run in 0..2 {
+        let o = Command::new(env!("CARGO_BIN_EXE_pelage"))
+            .args(["export", "--width", "32", "--height", "24", "-o"])
+            .arg(&out)
+            .output()
+            .expect("pelage runs");
+        assert!(
+            o.status.success(),
+            "run {run}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    for language in LANGUAGES {
+        assert!(
+            out.join("shaders")
+                .join(language)
+                .join("bindings.md")
+                .is_file()
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(out.join("shaders/fur.wgsl")).expect("fur.wgsl"),
+        SHADER_SOURCE
+    );
+}

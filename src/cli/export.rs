@@ -44,8 +44,13 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
     })??;
     folder.commit()?;
     super::say(format!(
-        "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/)",
+        "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/{})",
         args.output.display(),
+        if cfg!(feature = "gpu") {
+            ", shaders/"
+        } else {
+            ""
+        },
         summary.files.len()
     ))?;
     Ok(())
@@ -55,7 +60,10 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
 fn export_folder_entries() -> EntryRule {
     EntryRule {
         accepts: Box::new(|name: &str| {
-            matches!(name, "scene.json" | "oracle.png" | "meshes" | "textures")
+            matches!(
+                name,
+                "scene.json" | "oracle.png" | "meshes" | "textures" | "shaders"
+            )
         }),
         what: "part of a previous export",
     }

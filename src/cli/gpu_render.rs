@@ -1,38 +1,103 @@
 //! `pelage render --backend gpu`: one frame drawn by wgpu (feature `gpu`) from the same baked
-//! data as the oracle; see [`pelage::gpu`].
+//! data as the oracle; see [`pelage::gpu`]. `--api` and `--adapter` choose the device;
+//! `pelage gpu-info` lists the adapters.
 
 use super::Failure;
 use super::render::RenderArgs;
+use clap::Args;
 use pelage::scene::Scene;
+
+#[derive(Args)]
+pub struct GpuInfoArgs {
+    /// The API whose adapters to list: `vulkan`, `gl`, or `all` (default).
+    #[arg(long, value_name = "API", default_value = "all")]
+    pub api: String,
+}
+
+#[cfg(feature = "gpu")]
+fn gpu_failure(e: pelage::gpu::GpuError) -> Failure {
+    use pelage::gpu::GpuError;
+    match e {
+        // A device that is not there: bad input (exit 2), one line saying what to install
+        // or what exists.
+        GpuError::NoAdapter(_) | GpuError::NoGlAdapter(_) | GpuError::Choice(_) => {
+            Failure::bad_input(e.to_string())
+        }
+        _ => Failure::other(e.to_string()),
+    }
+}
 
 #[cfg(feature = "gpu")]
 pub fn run(scene: &Scene, args: &RenderArgs) -> Result<(), Failure> {
-    use pelage::gpu::{AdapterChoice, GpuContext, GpuOptions};
+    use pelage::gpu::{AdapterChoice, Api, GpuContext, GpuOptions};
     if args.frames.is_some() {
         return Err(Failure::bad_input(
             "--frames: the GPU backend renders single frames (use --time)",
         ));
     }
+    let api = match &args.api {
+        Some(name) => Api::parse(name).map_err(gpu_failure)?,
+        None => Api::default(),
+    };
+    let choice = args
+        .adapter
+        .as_deref()
+        .map(AdapterChoice::parse)
+        .unwrap_or_default();
     let prepared = super::with_threads(args.common.threads, || {
         pelage::render::PreparedScene::new(scene)
     })??;
-    let context =
-        GpuContext::new(AdapterChoice::default()).map_err(|e| Failure::other(e.to_string()))?;
+    let context = GpuContext::open(api, &choice).map_err(gpu_failure)?;
     let image = context
         .render(&prepared, scene.time, &GpuOptions::default())
-        .map_err(|e| Failure::other(e.to_string()))?;
+        .map_err(gpu_failure)?;
     super::write_png(&args.output, image.width(), image.height(), image.as_raw())?;
     eprintln!(
-        "gpu: {} ({:?})",
+        "gpu: {} ({:?}, {:?})",
         context.adapter_info().name,
-        context.adapter_info().device_type
+        context.adapter_info().device_type,
+        context.adapter_info().backend
     );
     Ok(())
 }
 
+#[cfg(feature = "gpu")]
+pub fn info(args: GpuInfoArgs) -> Result<(), Failure> {
+    use pelage::gpu::{Api, adapters};
+    let apis = if args.api.trim().eq_ignore_ascii_case("all") {
+        vec![Api::Vulkan, Api::Gl]
+    } else {
+        vec![Api::parse(&args.api).map_err(gpu_failure)?]
+    };
+    for api in apis {
+        let list = adapters(api);
+        let name = match api {
+            Api::Vulkan => "vulkan",
+            Api::Gl => "gl",
+        };
+        if list.is_empty() {
+            println!("{name}: no adapter");
+        }
+        for (i, a) in list.iter().enumerate() {
+            println!(
+                "{name} {i}: {} ({:?}; driver {} {})",
+                a.name, a.device_type, a.driver, a.driver_info
+            );
+        }
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "gpu"))]
+const NO_GPU: &str =
+    "this pelage was built without the `gpu` feature (cargo build --release --features gpu)";
+
 #[cfg(not(feature = "gpu"))]
 pub fn run(_scene: &Scene, _args: &RenderArgs) -> Result<(), Failure> {
-    Err(Failure::bad_input(
-        "--backend gpu: this pelage was built without the `gpu` feature (cargo build --release --features gpu)",
-    ))
+    Err(Failure::bad_input(format!("--backend gpu: {NO_GPU}")))
+}
+
+#[cfg(not(feature = "gpu"))]
+pub fn info(_args: GpuInfoArgs) -> Result<(), Failure> {
+    Err(Failure::bad_input(format!("gpu-info: {NO_GPU}")))
 }

@@ -40,6 +40,14 @@ pub struct RenderArgs {
     /// Which renderer draws the frame: the CPU oracle, or wgpu (built with `--features gpu`).
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
     pub backend: Backend,
+    /// With --backend gpu: the API wgpu draws through, `vulkan` (default) or `gl` (OpenGL ES
+    /// through EGL, Mesa's llvmpipe headless).
+    #[arg(long, value_name = "API")]
+    pub api: Option<String>,
+    /// With --backend gpu: the adapter, by index or part of its name as `pelage gpu-info`
+    /// lists them (default: the software one, lavapipe or llvmpipe, for reproducible figures).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub adapter: Option<String>,
 }
 
 /// The renderer behind `--backend`.
@@ -74,6 +82,11 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
             )));
         }
         return super::gpu_render::run(&scene, &args);
+    }
+    if args.api.is_some() || args.adapter.is_some() {
+        return Err(Failure::bad_input(
+            "--api and --adapter choose the GPU backend's device: add --backend gpu",
+        ));
     }
     if let Some(frames) = args.frames {
         return render_animation(&scene, &args, frames, tile);

@@ -21,9 +21,10 @@
 //!   `Rgba32Float` when the adapter can blend it (lavapipe can), else `Rgba16Float`; it is read
 //!   back and rounded to 8 bits on the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
 //!
-//! Adapters: Vulkan only. By default the CPU adapter (Mesa's lavapipe) is preferred, so the
-//! comparison is the same on every machine; with [`AdapterChoice::Any`] the first adapter
-//! wgpu's default choice gives (a hardware GPU where there is one).
+//! Adapters: Vulkan, or OpenGL ES through EGL ([`Api::Gl`]). By default the CPU adapter (Mesa's
+//! lavapipe, llvmpipe on GL) is preferred, so the comparison is the same on every machine; with
+//! [`AdapterChoice::Any`] the first adapter wgpu's default choice gives (a hardware GPU where
+//! there is one), with [`AdapterChoice::Index`] or [`AdapterChoice::Name`] one of [`adapters`].
 
 use crate::render::PreparedScene;
 use crate::render::fragment::Spot;
@@ -46,6 +47,14 @@ pub enum GpuError {
         "no Vulkan adapter found ({0}); install Mesa's software Vulkan driver (Debian: apt-get install mesa-vulkan-drivers) or a GPU driver"
     )]
     NoAdapter(String),
+    /// No OpenGL adapter (EGL) was found.
+    #[error(
+        "no OpenGL adapter found ({0}); install Mesa's EGL and software GL driver (Debian: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)"
+    )]
+    NoGlAdapter(String),
+    /// An `--api` or `--adapter` that does not exist here.
+    #[error("{0}")]
+    Choice(String),
     /// The device could not be created.
     #[error("cannot create the GPU device: {0}")]
     Device(String),
@@ -61,13 +70,97 @@ pub enum GpuError {
 }
 
 /// Which adapter to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub enum AdapterChoice {
-    /// The CPU (fallback) adapter, lavapipe: the same results on every machine.
+    /// The CPU (fallback) adapter, lavapipe (llvmpipe on GL): the same results on every machine.
     #[default]
     Software,
     /// wgpu's default adapter (a hardware GPU where there is one).
     Any,
+    /// The adapter at this index in [`adapters`]' list.
+    Index(usize),
+    /// The adapter whose name contains this text (case-insensitive); refused when several do.
+    Name(String),
+}
+
+impl AdapterChoice {
+    /// `--adapter`'s value: a number is an index in [`adapters`]' list, `software` and `any`
+    /// the two defaults, anything else part of a name.
+    pub fn parse(text: &str) -> AdapterChoice {
+        match text.trim() {
+            t if t.eq_ignore_ascii_case("software") => AdapterChoice::Software,
+            t if t.eq_ignore_ascii_case("any") => AdapterChoice::Any,
+            t => match t.parse::<usize>() {
+                Ok(i) => AdapterChoice::Index(i),
+                Err(_) => AdapterChoice::Name(t.to_string()),
+            },
+        }
+    }
+}
+
+/// The graphics API wgpu draws through.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Api {
+    /// Vulkan (Mesa's lavapipe by default).
+    #[default]
+    Vulkan,
+    /// OpenGL ES through EGL (Mesa's llvmpipe headless by default); the shader is the same
+    /// WGSL with the mip level count computed instead of queried
+    /// ([`translate::without_level_query`]: GLSL ES has no level query).
+    Gl,
+}
+
+impl Api {
+    /// `--api`'s value: `vulkan` or `gl`.
+    pub fn parse(text: &str) -> Result<Api, GpuError> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "vulkan" | "vk" => Ok(Api::Vulkan),
+            "gl" | "gles" | "opengl" => Ok(Api::Gl),
+            other => Err(GpuError::Choice(format!(
+                "--api {other:?}: unknown API (vulkan or gl)"
+            ))),
+        }
+    }
+
+    fn backends(self) -> wgpu::Backends {
+        match self {
+            Api::Vulkan => wgpu::Backends::VULKAN,
+            Api::Gl => wgpu::Backends::GL,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Api::Vulkan => "Vulkan",
+            Api::Gl => "OpenGL (EGL)",
+        }
+    }
+}
+
+fn instance(api: Api) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = api.backends();
+    wgpu::Instance::new(desc)
+}
+
+/// The adapters `api` offers on this machine, in wgpu's order (the indices of `--adapter N`).
+pub fn adapters(api: Api) -> Vec<wgpu::AdapterInfo> {
+    let instance = instance(api);
+    pollster::block_on(instance.enumerate_adapters(api.backends()))
+        .iter()
+        .map(|a| a.get_info())
+        .collect()
+}
+
+fn describe(list: &[wgpu::AdapterInfo]) -> String {
+    if list.is_empty() {
+        return "none found".into();
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, a)| format!("{i}: {}", a.name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Options of a GPU render.
@@ -83,6 +176,7 @@ pub struct GpuContext {
     queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
     target_format: wgpu::TextureFormat,
+    api: Api,
 }
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -93,16 +187,69 @@ const FIN_FLOATS: usize = 31;
 impl GpuContext {
     /// Opens a Vulkan adapter (see [`AdapterChoice`]) and creates a device on it.
     pub fn new(choice: AdapterChoice) -> Result<Self, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::VULKAN;
-        let instance = wgpu::Instance::new(desc);
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: choice == AdapterChoice::Software,
-            compatible_surface: None,
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        Self::open(Api::Vulkan, &choice)
+    }
+
+    /// Opens an adapter of `api` (see [`AdapterChoice`]) and creates a device on it.
+    pub fn open(api: Api, choice: &AdapterChoice) -> Result<Self, GpuError> {
+        let instance = instance(api);
+        let missing = |e: String| match api {
+            Api::Vulkan => GpuError::NoAdapter(e),
+            Api::Gl => GpuError::NoGlAdapter(e),
+        };
+        let adapter = match choice {
+            AdapterChoice::Software | AdapterChoice::Any => {
+                pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::HighPerformance,
+                    force_fallback_adapter: *choice == AdapterChoice::Software,
+                    compatible_surface: None,
+                    ..Default::default()
+                }))
+                .map_err(|e| missing(e.to_string()))?
+            }
+            AdapterChoice::Index(_) | AdapterChoice::Name(_) => {
+                let mut all = pollster::block_on(instance.enumerate_adapters(api.backends()));
+                let infos: Vec<wgpu::AdapterInfo> = all.iter().map(|a| a.get_info()).collect();
+                if all.is_empty() {
+                    return Err(missing("enumerating adapters found none".into()));
+                }
+                let index = match choice {
+                    AdapterChoice::Index(i) if *i < all.len() => *i,
+                    AdapterChoice::Index(i) => {
+                        return Err(GpuError::Choice(format!(
+                            "--adapter {i}: no such {} adapter (have {})",
+                            api.name(),
+                            describe(&infos)
+                        )));
+                    }
+                    AdapterChoice::Name(name) => {
+                        let wanted = name.to_lowercase();
+                        let hits: Vec<usize> = (0..infos.len())
+                            .filter(|&i| infos[i].name.to_lowercase().contains(&wanted))
+                            .collect();
+                        match hits[..] {
+                            [i] => i,
+                            [] => {
+                                return Err(GpuError::Choice(format!(
+                                    "--adapter {name:?}: no {} adapter has this name (have {})",
+                                    api.name(),
+                                    describe(&infos)
+                                )));
+                            }
+                            _ => {
+                                return Err(GpuError::Choice(format!(
+                                    "--adapter {name:?}: several {} adapters match (have {}); give the index",
+                                    api.name(),
+                                    describe(&infos)
+                                )));
+                            }
+                        }
+                    }
+                    _ => 0,
+                };
+                all.swap_remove(index)
+            }
+        };
         let info = adapter.get_info();
         let blendable = adapter
             .features()
@@ -127,7 +274,13 @@ impl GpuContext {
             queue,
             info,
             target_format,
+            api,
         })
+    }
+
+    /// The API drawn through.
+    pub fn api(&self) -> Api {
+        self.api
     }
 
     /// The adapter in use (name, driver, device type).
@@ -187,6 +340,14 @@ impl GpuContext {
             return Err(GpuError::Scene("the mesh has no triangles".into()));
         }
         let source = options.shader.as_deref().unwrap_or(SHADER_SOURCE);
+        let gl_source;
+        let source = match self.api {
+            Api::Vulkan => source,
+            Api::Gl => {
+                gl_source = translate::without_level_query(source)?;
+                gl_source.as_str()
+            }
+        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("fur.wgsl"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -692,6 +853,25 @@ impl GpuContext {
     }
 }
 
+/// Waits for `submission` (all work when `None`). wgpu's GL backend turns "no timeout" into
+/// `glClientWaitSync`'s largest, about 2.1 s, which a large frame on llvmpipe can pass: a wait
+/// that times out is repeated (up to ten minutes in all) instead of failing.
+fn wait(device: &wgpu::Device, submission: Option<wgpu::SubmissionIndex>) -> Result<(), GpuError> {
+    for _ in 0..300 {
+        match device.poll(wgpu::PollType::Wait {
+            submission_index: submission.clone(),
+            timeout: None,
+        }) {
+            Ok(_) => return Ok(()),
+            Err(wgpu::PollError::Timeout) => continue,
+            Err(e) => return Err(GpuError::Readback(e.to_string())),
+        }
+    }
+    Err(GpuError::Readback(
+        "the GPU did not finish the frame in ten minutes".into(),
+    ))
+}
+
 /// A fin pass of a frame: vertices, indices, index count, layer bind group.
 type FinDraw = (wgpu::Buffer, wgpu::Buffer, u32, wgpu::BindGroup);
 
@@ -733,12 +913,7 @@ impl GpuFrame<'_> {
         let mut encoder = device.create_command_encoder(&Default::default());
         self.encode_pass(&mut encoder);
         let index = self.context.queue.submit([encoder.finish()]);
-        let waited = device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(index),
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Readback(e.to_string()));
+        let waited = wait(device, Some(index));
         if let Some(e) = pollster::block_on(guard.pop()) {
             return Err(GpuError::Validation(e.to_string()));
         }
@@ -849,12 +1024,7 @@ impl GpuFrame<'_> {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = sender.send(r);
         });
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        wait(device, None)?;
         receiver
             .recv()
             .map_err(|e| GpuError::Readback(e.to_string()))?

@@ -7,9 +7,10 @@
 //! - **GLSL**: uniform blocks, storage blocks and textures each numbered from 0 in
 //!   (group, binding) order; textures and their sampler are combined (`sampler2D`); the sampler
 //!   has no slot of its own (set its state on the texture units of the textures it samples).
-//!   GLSL ES 3.00 has no storage buffers and no explicit binding numbers: its variant of the
-//!   shader holds the spots and matches in uniform arrays of fixed capacity
-//!   ([`ES300_MAX_SPOTS`], [`ES300_MAX_MATCHES`]) and its resources are bound by name.
+//!   GLSL ES 3.00 has no storage buffers, no level query and no explicit binding numbers: its
+//!   variant of the shader ([`es300_source`]) holds the spots and matches in uniform arrays of
+//!   fixed capacity ([`ES300_MAX_SPOTS`], [`ES300_MAX_MATCHES`]), computes the mip level count
+//!   from the texture size ([`without_level_query`]), and its resources are bound by name.
 //! - **HLSL**: `b` registers for uniform buffers, `t` for textures and read-only storage
 //!   buffers (`ByteAddressBuffer`), all in space 0; samplers go through naga's sampler heap
 //!   (see `bindings.md`).
@@ -20,8 +21,8 @@
 //!   entry point.
 //!
 //! Clip space in every output is wgpu's (`0 ≤ z ≤ w`); GLSL keeps it as is (see the README,
-//! "Porting the shader"), SPIR-V negates clip y as wgpu's Vulkan backend does (use a viewport
-//! of positive height), HLSL and MSL need nothing.
+//! "Porting the shader to an engine"), SPIR-V negates clip y as wgpu's Vulkan backend does
+//! (use a viewport of positive height), HLSL and MSL need nothing.
 
 use super::{GpuError, SHADER_SOURCE};
 use naga::back::{glsl, hlsl, msl, spv};
@@ -213,13 +214,18 @@ pub fn es300_source() -> Result<String, GpuError> {
         }
         source = source.replace(from, &to);
     }
+    without_level_query(&source)
+}
+
+/// `source` with every `textureNumLevels(t)` replaced by the level count of a full mip chain
+/// computed from the size of level 0 (`es300_levels`): GLSL ES (any version) has no level
+/// query, so the ES 3.00 output and wgpu's GL backend draw this. The same count for pelage's
+/// textures, which are uploaded with every level down to 1×1.
+pub fn without_level_query(source: &str) -> Result<String, GpuError> {
     if !source.contains("textureNumLevels(") {
-        return Err(fail(
-            "GLSL ES 3.00 variant",
-            "no textureNumLevels to replace",
-        ));
+        return Err(fail("GLSL ES variant", "no textureNumLevels to replace"));
     }
-    source = source.replace("textureNumLevels(", "es300_levels(");
+    let mut source = source.replace("textureNumLevels(", "es300_levels(");
     source.push_str(ES300_LEVELS);
     Ok(source)
 }

@@ -1,0 +1,121 @@
+//! Choosing the GPU backend's device from the command line: `pelage gpu-info` lists the
+//! adapters, `render --backend gpu --api vulkan|gl --adapter NAME|INDEX` picks one, and an
+//! unknown API, an adapter that does not exist or the flags without `--backend gpu` give one
+//! clear line and exit 2, never a panic. Without the `gpu` feature, `gpu-info` says so (exit 2).
+
+mod common;
+
+use common::pelage;
+
+/// stderr's lines from pelage itself (Mesa may print its own `XDG_RUNTIME_DIR` complaints).
+fn own_errors(out: &std::process::Output) -> Vec<String> {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| !l.contains("XDG_RUNTIME_DIR"))
+        .map(str::to_string)
+        .collect()
+}
+
+fn refused(args: &[&str], says: &str) {
+    let out = pelage(args);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {out:?}");
+    let lines = own_errors(&out);
+    assert_eq!(lines.len(), 1, "{args:?}: one line, got {lines:?}");
+    assert!(
+        lines[0].contains(says),
+        "{args:?}: {lines:?} lacks {says:?}"
+    );
+}
+
+#[test]
+fn api_and_adapter_need_the_gpu_backend() {
+    refused(&["render", "--api", "gl", "-o", "x.png"], "--backend gpu");
+    refused(
+        &["render", "--adapter", "0", "-o", "x.png"],
+        "--backend gpu",
+    );
+}
+
+#[cfg(not(feature = "gpu"))]
+#[test]
+fn gpu_info_says_the_feature_is_missing() {
+    refused(&["gpu-info"], "`gpu` feature");
+}
+
+#[cfg(feature = "gpu")]
+mod gpu {
+    use super::*;
+
+    const SMALL: [&str; 4] = ["--width", "32", "--height", "24"];
+
+    #[test]
+    fn gpu_info_lists_the_software_adapters() {
+        let out = pelage(&["gpu-info"]);
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        // lavapipe (Vulkan) is installed wherever the GPU tests run.
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with("vulkan 0: ") && l.contains("llvmpipe")),
+            "{text}"
+        );
+        let out = pelage(&["gpu-info", "--api", "vulkan"]);
+        assert_eq!(out.status.code(), Some(0));
+        assert!(!String::from_utf8_lossy(&out.stdout).contains("gl "));
+        refused(&["gpu-info", "--api", "metal"], "--api \"metal\"");
+    }
+
+    #[test]
+    fn unknown_api_or_adapter_is_refused_in_one_line() {
+        let dir = common::scratch("refused");
+        let png = dir.join("x.png");
+        let png = png.to_str().expect("path");
+        let render = |extra: &[&str]| {
+            let mut args = vec!["render", "--backend", "gpu", "-o", png];
+            args.extend(SMALL);
+            args.extend(extra);
+            args.into_iter().map(str::to_string).collect::<Vec<_>>()
+        };
+        let call = |extra: &[&str], says: &str| {
+            let args = render(extra);
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            refused(&args, says);
+            assert!(!std::path::Path::new(png).exists(), "nothing written");
+        };
+        call(&["--api", "metal"], "unknown API");
+        call(&["--adapter", "99"], "--adapter 99: no such Vulkan adapter");
+        call(
+            &["--adapter", "no-such-gpu"],
+            "no Vulkan adapter has this name",
+        );
+    }
+
+    #[test]
+    fn adapter_by_index_and_by_name_renders_the_same_frame() {
+        let dir = common::scratch("pick");
+        // lavapipe's index in the list (0 where it is the only Vulkan adapter).
+        let out = pelage(&["gpu-info", "--api", "vulkan"]);
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        let index = text
+            .lines()
+            .find(|l| l.contains("llvmpipe"))
+            .and_then(|l| l.strip_prefix("vulkan "))
+            .and_then(|l| l.split(':').next())
+            .expect("lavapipe listed")
+            .to_string();
+        let mut images = Vec::new();
+        for pick in [index.as_str(), "llvmpipe", "software"] {
+            let png = dir.join(format!("{pick}.png"));
+            let mut args = vec!["render", "--backend", "gpu", "--adapter", pick, "-o"];
+            let path = png.to_str().expect("path").to_string();
+            args.push(&path);
+            args.extend(SMALL);
+            let out = pelage(&args);
+            assert_eq!(out.status.code(), Some(0), "--adapter {pick}: {out:?}");
+            images.push(std::fs::read(&png).expect("png"));
+        }
+        // The three choices are lavapipe: the same bytes.
+        assert_eq!(images[0], images[1]);
+        assert_eq!(images[0], images[2]);
+    }
+}
