@@ -64,9 +64,7 @@ impl SheetLayout {
             rows: n.div_ceil(columns),
             thumbnail_width,
             thumbnail_height,
-            label_height: lines
-                .saturating_mul(label_line_height())
-                .saturating_add(4),
+            label_height: lines.saturating_mul(label_line_height()).saturating_add(4),
         })
     }
 
