@@ -220,6 +220,8 @@ fn a_sweep_replaces_an_earlier_sweep_whole_and_never_mixes() {
         [
             "contact_sheet.png",
             "fps.png",
+            "fragments.png",
+            "frame_time.png",
             "point_0000.png",
             "point_0001.png",
             "results.csv",

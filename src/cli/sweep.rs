@@ -1,6 +1,7 @@
 //! `pelage sweep`: the thesis's chapter 4 experiments. Every point of the parameter product is
 //! baked, rendered `--frames` times and timed; the folder gets `point_NNNN.png` per point,
-//! `results.csv`, `contact_sheet.png` and `fps.png`. `pelage sweep-merge` joins shards.
+//! `results.csv`, `contact_sheet.png` and the plots (`fps.png`, `frame_time.png`,
+//! `fragments.png`). `pelage sweep-merge` joins shards.
 
 use super::render::Backend;
 use super::staged::{EntryRule, StagedFolder};
@@ -225,11 +226,12 @@ fn sweep_folder_entries() -> EntryRule {
             };
             matches!(
                 name,
-                "results.csv" | "contact_sheet.png" | "fps.png" | sweep::MANIFEST_FILE
-            ) || name
-                .strip_suffix("_diff.png")
-                .or_else(|| name.strip_suffix(".png"))
-                .is_some_and(point)
+                "results.csv" | "contact_sheet.png" | sweep::MANIFEST_FILE
+            ) || sweep::Metric::ALL.iter().any(|m| m.file_name() == name)
+                || name
+                    .strip_suffix("_diff.png")
+                    .or_else(|| name.strip_suffix(".png"))
+                    .is_some_and(point)
         }),
         what: "part of a previous sweep",
     }
