@@ -178,6 +178,41 @@ fn folders_are_compared_pair_by_pair_worst_first() {
 }
 
 #[test]
+fn every_pair_of_a_folder_is_held_to_the_memory_limit_before_decoding() {
+    let dir = scratch("memory");
+    let (r, c) = folders(&dir, false);
+    let out = dir.join("report");
+    // 96×64 images need about 0.7 MB each pair; 100K is below that, so every pair is refused
+    // from its headers, named in its row, and the run exits 2.
+    let o = pelage(&[
+        "compare",
+        path(&r),
+        path(&c),
+        "-o",
+        path(&out),
+        "--max-memory",
+        "100K",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let json = report_json(&out);
+    let rows = json["rows"].as_array().expect("rows");
+    assert!(!rows.is_empty(), "{json}");
+    for row in rows {
+        assert_eq!(row["verdict"], "error", "{row}");
+        let error = row["error"].as_str().unwrap_or_default();
+        assert!(error.contains("--max-memory"), "{row}");
+    }
+    // The default limit lets the same folders through.
+    let o = pelage(&["compare", path(&r), path(&c), "-o", path(&out)]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
 fn a_pair_that_cannot_be_compared_makes_exit_2_and_bad_calls_are_refused() {
     let dir = scratch("errors");
     let (r, c) = folders(&dir, true);

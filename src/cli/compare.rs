@@ -49,6 +49,28 @@ fn load(path: &Path) -> Result<image::RgbaImage, Failure> {
     pelage::input::read_image(path, "image").map_err(|e| Failure::bad_input(e.to_string()))
 }
 
+/// Refuses a pair whose comparison would need more than `max_memory`, from the sizes in the
+/// images' headers, before either is decoded.
+fn check_pair_memory(
+    reference: &Path,
+    test: &Path,
+    max_memory: Option<u64>,
+) -> Result<(), Failure> {
+    let size = |path: &Path| {
+        pelage::input::image_size(path, "image").map_err(|e| Failure::bad_input(e.to_string()))
+    };
+    let ((a_size, a_bytes), (b_size, b_bytes)) = (size(reference)?, size(test)?);
+    let estimate = pelage::limits::compare_memory(a_size, b_size, a_bytes.saturating_add(b_bytes));
+    pelage::limits::check_memory("the comparison", estimate, super::max_memory(max_memory))
+        .map_err(|e| {
+            super::limit_failure(
+                &format!("{} and {}", reference.display(), test.display()),
+                e,
+            )
+        })?;
+    Ok(())
+}
+
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
     let tolerance =
         Tolerance::parse(&args.tolerance).map_err(|e| Failure::bad_input(format!("--{e}")))?;
@@ -69,23 +91,7 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             out.display()
         )));
     }
-    // Sizes from the headers: the memory the comparison needs is checked before decoding.
-    let size = |path: &Path| {
-        pelage::input::image_size(path, "image").map_err(|e| Failure::bad_input(e.to_string()))
-    };
-    let ((a_size, a_bytes), (b_size, b_bytes)) = (size(&args.reference)?, size(&args.test)?);
-    let estimate = pelage::limits::compare_memory(a_size, b_size, a_bytes.saturating_add(b_bytes));
-    pelage::limits::check_memory(
-        "the comparison",
-        estimate,
-        super::max_memory(args.max_memory),
-    )
-    .map_err(|e| {
-        super::limit_failure(
-            &format!("{} and {}", args.reference.display(), args.test.display()),
-            e,
-        )
-    })?;
+    check_pair_memory(&args.reference, &args.test, args.max_memory)?;
     let a = load(&args.reference)?;
     let b = load(&args.test)?;
     let comparison = compare_images(&a, &b, &tolerance).map_err(|e| {
@@ -166,12 +172,16 @@ fn compare_pair(
         comparison: None,
         images: None,
     };
-    let loaded = load(&args.reference.join(&reference)).and_then(|a| {
-        let b = load(&args.test.join(&capture))?;
-        let c = compare_images(&a, &b, tolerance)
-            .map_err(|e| Failure::bad_input(format!("{reference} and {capture}: {e}")))?;
-        Ok((a, b, c))
-    });
+    let (reference_path, capture_path) =
+        (args.reference.join(&reference), args.test.join(&capture));
+    let loaded = check_pair_memory(&reference_path, &capture_path, args.max_memory)
+        .and_then(|()| load(&reference_path))
+        .and_then(|a| {
+            let b = load(&capture_path)?;
+            let c = compare_images(&a, &b, tolerance)
+                .map_err(|e| Failure::bad_input(format!("{reference} and {capture}: {e}")))?;
+            Ok((a, b, c))
+        });
     let (a, b, comparison) = match loaded {
         Ok(v) => v,
         Err(f) => {
