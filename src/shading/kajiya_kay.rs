@@ -3,7 +3,7 @@
 //! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
 use super::lanes::{LANES, Vec3x4};
-use super::numeric::{finite_or_zero, pow01, pow01_x4, pow01_x4_two_exponents};
+use super::numeric::{finite_or_zero, pow01, pow01_x4, pow01_x4_diffuse_specular_dampened};
 use super::tangent_space::{cos_sin_unit, cos_sin_unit_x4};
 use glam::Vec3;
 use wide::f32x4;
@@ -149,11 +149,10 @@ pub fn strand_lighting_x4(
         (cl * ce + sl * se).to_array()
     };
     let centre = specular_base(&t, (cos_tl, sin_tl));
-    let diffuse = pow01_x4(sin_tl, [exponents.banks; LANES]);
-    let (centre_specular, specular_to_dampen) = pow01_x4_two_exponents(
+    let (diffuse, centre_specular, specular_to_dampen) = pow01_x4_diffuse_specular_dampened(
+        sin_tl,
         centre,
-        [exponents.specular; LANES],
-        [exponents.dampened; LANES],
+        [exponents.banks, exponents.specular, exponents.dampened],
     );
     let specular = match tangents {
         SpecularTangents::One => centre_specular,

@@ -152,20 +152,120 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     exp2_of_product_x4(x, &log2_x, f32x4::new(exponent.map(sanitize_exponent))).to_array()
 }
 
-/// [`pow01_x4`] of one base with two exponents, `(base^a, base^b)` lane by lane, the same
-/// bits as two calls: the two powers share the logarithm.
+/// The powers of one quad's strand lighting with one tangent, 12 lanes in three batches
+/// instead of five: `(d^banks, c^specular, c^dampened)` lane by lane for the diffuse bases `d`
+/// and the specular bases `c`, the same bits as [`pow01`] of each. The two bases' logarithms
+/// are taken as one batch of 8 lanes and `d^banks, c^specular` as another; `c^dampened` shares
+/// `c`'s logarithm.
+///
+/// Written as plain per-lane loops over arrays of the scalar steps (no `wide` type): LLVM turns
+/// an 8-lane loop into 256-bit instructions in the AVX2 copy of the hot path ([`crate::simd`])
+/// and into two 128-bit halves in the baseline, while `wide::f32x8` is always two halves in a
+/// baseline build. Each lane runs the scalar [`pow01`]'s IEEE operations in its order.
 #[inline(always)]
-pub(crate) fn pow01_x4_two_exponents(
-    base: [f32; 4],
-    a: [f32; 4],
-    b: [f32; 4],
-) -> ([f32; 4], [f32; 4]) {
-    let x = saturate_x4(f32x4::new(base));
-    let log2_x = Log2x4::new(x);
-    (
-        exp2_of_product_x4(x, &log2_x, f32x4::new(a.map(sanitize_exponent))).to_array(),
-        exp2_of_product_x4(x, &log2_x, f32x4::new(b.map(sanitize_exponent))).to_array(),
-    )
+pub(crate) fn pow01_x4_diffuse_specular_dampened(
+    diffuse: [f32; 4],
+    specular: [f32; 4],
+    exponents: [f32; 3],
+) -> ([f32; 4], [f32; 4], [f32; 4]) {
+    let [banks, spec, damp] = exponents.map(sanitize_exponent);
+    let mut x = [0.0f32; 8];
+    let mut y = [0.0f32; 8];
+    for i in 0..4 {
+        x[i] = saturate_select(diffuse[i]);
+        x[4 + i] = saturate_select(specular[i]);
+        y[i] = banks;
+        y[4 + i] = spec;
+    }
+    let mut lh = [0.0f32; 8];
+    let mut ll = [0.0f32; 8];
+    for i in 0..8 {
+        (lh[i], ll[i]) = log2_lane(x[i]);
+    }
+    let mut first = [0.0f32; 8];
+    for i in 0..8 {
+        first[i] = exp2_of_product_lane(x[i], lh[i], ll[i], y[i]);
+    }
+    let mut dampened = [0.0f32; 4];
+    for i in 0..4 {
+        dampened[i] = exp2_of_product_lane(x[4 + i], lh[4 + i], ll[4 + i], damp);
+    }
+    let (mut d, mut c) = ([0.0f32; 4], [0.0f32; 4]);
+    d.copy_from_slice(&first[..4]);
+    c.copy_from_slice(&first[4..]);
+    (d, c, dampened)
+}
+
+/// [`saturate`] as compares and selects, the same bits (`−0` and NaN give `+0`), so that a
+/// loop of it vectorises.
+#[inline(always)]
+fn saturate_select(x: f32) -> f32 {
+    let at_most_one = if x < 1.0 { x } else { 1.0 };
+    if x > 0.0 { at_most_one } else { 0.0 }
+}
+
+/// [`log2_scalar`] with selects for its branch, for loops over lanes.
+#[inline(always)]
+fn log2_lane(x: f32) -> (f32, f32) {
+    let subnormal = x < f32::MIN_POSITIVE;
+    let scaled = x * TWO_POW_23;
+    let xs = if subnormal { scaled } else { x };
+    let bias = if subnormal { -23.0 } else { 0.0 };
+    let bits = xs.to_bits() as i32;
+    let k = bits.wrapping_sub(SQRT_HALF_BITS) >> 23;
+    let m = f32::from_bits(bits.wrapping_sub(k << 23) as u32);
+    let e = k as f32 + bias;
+    let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
+    let u = m - 1.0;
+    let rv = 1.0 / (m + 1.0);
+    let s = u * rv;
+    let sh = mask(s);
+    let mh = mask(m);
+    let ml = m - mh;
+    let sl = (((u - sh) - sh * mh) - sh * ml) * rv;
+    let z = s * s;
+    let q = LOG2_Q[0] + z * (LOG2_Q[1] + z * LOG2_Q[2]);
+    let tail = (s * z) * q;
+    let rh = LOG2_C_HIGH * sh;
+    let rl = (LOG2_C_LOW * s + LOG2_C_HIGH * sl) + tail;
+    let r = rh + rl;
+    let r_low = rl - (r - rh);
+    let lh = e + r;
+    let ll = (r - (lh - e)) + r_low;
+    (lh, ll)
+}
+
+/// The second half of [`pow01`] (from `x`'s logarithm `lh + ll` and the sanitised `y`) with
+/// selects for its branches, for loops over lanes.
+#[inline(always)]
+fn exp2_of_product_lane(x: f32, lh: f32, ll: f32, y: f32) -> f32 {
+    let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
+    let yh = mask(y);
+    let yl = y - yh;
+    let lhh = mask(lh);
+    let lhl = lh - lhh;
+    let th = yh * lhh;
+    let tl = (yh * lhl + yl * lh) + y * ll;
+    let t = th + tl;
+    let clamped = if t > EXP2_LOWEST { t } else { EXP2_LOWEST };
+    let shifted = clamped + ROUND_MAGIC;
+    let n = shifted - ROUND_MAGIC;
+    let whole = (shifted.to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
+    let f = (th - n) + tl;
+    let mut p = EXP2_P[5];
+    for c in EXP2_P[..5].iter().rev() {
+        p = c + f * p;
+    }
+    let fraction = 1.0 + f * p;
+    let small = whole < -125;
+    let whole = if small { whole + 64 } else { whole };
+    let scale = if small { TWO_POW_MINUS_64 } else { 1.0 };
+    let scaled = f32::from_bits((fraction.to_bits() as i32).wrapping_add(whole << 23) as u32);
+    let out = scaled * scale;
+    let out = if t >= UNDERFLOW_BELOW { out } else { 0.0 };
+    let out = if x == 0.0 { 0.0 } else { out };
+    let out = if x == 1.0 { 1.0 } else { out };
+    if y == 0.0 { 1.0 } else { out }
 }
 
 /// The mask keeping a float's sign, exponent and 11 high mantissa bits: 12 significant bits,
@@ -457,27 +557,47 @@ mod tests {
             let base = [chunk[0], chunk[1], chunk[2], chunk[3]];
             let exponent: [f32; 4] =
                 std::array::from_fn(|i| POW_EXPONENTS[(e_index + i * 5) % POW_EXPONENTS.len()]);
-            let other: [f32; 4] = std::array::from_fn(|i| exponent[(i + 1) % 4]);
             let got = pow01_x4(base, exponent);
-            let (first, second) = pow01_x4_two_exponents(base, exponent, other);
             for i in 0..4 {
                 let want = pow01(base[i], exponent[i]);
                 assert!((0.0..=1.0).contains(&want), "{}^{}", base[i], exponent[i]);
-                for lane in [got[i], first[i]] {
-                    assert_eq!(
-                        lane.to_bits(),
-                        want.to_bits(),
-                        "pow01({}, {}) = {want}, x4 gave {lane}",
-                        base[i],
-                        exponent[i]
-                    );
-                }
                 assert_eq!(
-                    second[i].to_bits(),
-                    pow01(base[i], other[i]).to_bits(),
-                    "{}^{}",
+                    got[i].to_bits(),
+                    want.to_bits(),
+                    "pow01({}, {}) = {want}, x4 gave {}",
                     base[i],
-                    other[i]
+                    exponent[i],
+                    got[i]
+                );
+            }
+            let specular = [chunk[3], chunk[1], chunk[2], chunk[0]];
+            let n = POW_EXPONENTS.len();
+            for k in 0..n {
+                let exponents = [
+                    POW_EXPONENTS[k],
+                    POW_EXPONENTS[(k + e_index) % n],
+                    POW_EXPONENTS[(k + 2 * e_index + 1) % n],
+                ];
+                assert_powers_are_pow01(base, specular, exponents);
+            }
+        }
+    }
+
+    /// Each lane of [`pow01_x4_diffuse_specular_dampened`] against [`pow01`], bit for bit.
+    fn assert_powers_are_pow01(diffuse: [f32; 4], specular: [f32; 4], exponents: [f32; 3]) {
+        let (d, c, damp) = pow01_x4_diffuse_specular_dampened(diffuse, specular, exponents);
+        let [banks, spec, dampened] = exponents;
+        for i in 0..4 {
+            for (got, base, exponent) in [
+                (d[i], diffuse[i], banks),
+                (c[i], specular[i], spec),
+                (damp[i], specular[i], dampened),
+            ] {
+                let want = pow01(base, exponent);
+                assert_eq!(
+                    got.to_bits(),
+                    want.to_bits(),
+                    "pow01({base:e}, {exponent:e}) = {want:e}, the 8-lane batch gave {got:e}"
                 );
             }
         }
@@ -492,9 +612,10 @@ mod tests {
             let base: [f32; 4] =
                 std::array::from_fn(|_| f32::from_bits((rng.next_u64() % 0x3f80_0001) as u32));
             let exponent: [f32; 4] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
-            let other: [f32; 4] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
+            let specular: [f32; 4] =
+                std::array::from_fn(|_| f32::from_bits((rng.next_u64() % 0x3f80_0001) as u32));
+            let exponents: [f32; 3] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
             let got = pow01_x4(base, exponent);
-            let (first, second) = pow01_x4_two_exponents(base, exponent, other);
             for i in 0..4 {
                 let want = pow01(base[i], exponent[i]);
                 assert_eq!(
@@ -504,21 +625,8 @@ mod tests {
                     base[i],
                     exponent[i]
                 );
-                assert_eq!(
-                    first[i].to_bits(),
-                    want.to_bits(),
-                    "{}^{}",
-                    base[i],
-                    exponent[i]
-                );
-                assert_eq!(
-                    second[i].to_bits(),
-                    pow01(base[i], other[i]).to_bits(),
-                    "{}^{}",
-                    base[i],
-                    other[i]
-                );
             }
+            assert_powers_are_pow01(base, specular, exponents);
         }
     }
 
