@@ -60,8 +60,8 @@ const SAMPLE_BYTES: u64 = 20; // one supersample of a bake grid
 const DOWNSAMPLE_PER_TEXEL: u64 = 12 + 12 + 4 + 1; // colour, tangent, alpha, covered
 const SHELL_PER_TEXEL: u64 = 8 + 11; // colour + tangent RGBA8 as baked, then as textures × 4/3
 const VERTEX_BYTES: u64 = 92 + 100; // mesh::Vertex plus the temporaries of building frames
-const CLIP_VERTEX_BYTES: u64 = 16 + 88; // clip position + the fur varyings
-const SETUP_TRIANGLE_BYTES: u64 = 160 + 3 * 88 + 8; // set-up triangle, varyings, bin entries
+const CLIP_VERTEX_BYTES: u64 = 16 + 112; // clip position + the fur varyings
+const SETUP_TRIANGLE_BYTES: u64 = 160 + 12 + 8; // set-up triangle, corner indices, bin entries
 const EDGE_BYTES_PER_TRIANGLE: u64 = 180; // ~1.5 edges per triangle with their face lists
 const OBJ_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 3 * 48 + 64; // tobj faces, index map, copies
 const OBJ_BYTES_PER_ATTRIBUTE: u64 = 12 + 12; // tobj's copy and ours
@@ -71,8 +71,9 @@ const EXPORT_SKIN_VERTEX_BYTES: u64 = 12 + 12 + 16 + 8 + 12 + 12 + 12;
 /// floating point, FLIP's filtered colour and feature planes, its error map and the heat maps
 /// (87 measured at 1024² and 2048², rounded up for what the metrics may add).
 pub const COMPARE_BYTES_PER_PIXEL: u64 = 112;
-/// Set-up triangles are kept until this many are pending (the rasterizer's auto-flush).
-const PENDING_TRIANGLES: u64 = 1 << 20;
+/// Set-up triangles and their draws' vertices are kept until this many are pending (the
+/// rasterizer's auto-flush).
+const PENDING_ENTRIES: u64 = 1 << 20;
 
 /// How big the mesh is: triangles and vertices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -197,10 +198,12 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
     } else {
         0
     };
-    let pending = mesh
-        .triangles
+    // Each pending draw keeps its set-up triangles and its vertices (which the triangles'
+    // corners index) until the auto-flush; the last draw may overshoot by one draw's worth.
+    let draw_entries = mesh.triangles.saturating_add(mesh.vertices);
+    let pending = draw_entries
         .saturating_mul(shells + 2)
-        .min(PENDING_TRIANGLES.saturating_add(mesh.triangles));
+        .min(PENDING_ENTRIES.saturating_add(draw_entries));
     let mut parts = vec![
         ("the framebuffer", product(&[pixels, FRAMEBUFFER_PER_PIXEL])),
         (
@@ -253,8 +256,7 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
         ),
         (
             "set-up triangles (mesh triangles × shells)",
-            product(&[mesh.vertices, CLIP_VERTEX_BYTES])
-                .saturating_add(product(&[pending, SETUP_TRIANGLE_BYTES])),
+            product(&[pending, SETUP_TRIANGLE_BYTES.max(CLIP_VERTEX_BYTES)]),
         ),
     ];
     if work.export {
@@ -565,6 +567,21 @@ pub fn parse_bytes(text: &str) -> Result<u64, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counted_sizes_cover_the_rasterizers_structures() {
+        use crate::raster::clip::ClipVertex;
+        use crate::raster::setup::SetupTriangle;
+        use crate::render::fragment::FurVaryings;
+        let corners_and_bin = 12 + 4;
+        assert!(
+            SETUP_TRIANGLE_BYTES >= (size_of::<SetupTriangle>() + corners_and_bin) as u64,
+            "{} bytes counted, {} used",
+            SETUP_TRIANGLE_BYTES,
+            size_of::<SetupTriangle>() + corners_and_bin
+        );
+        assert!(CLIP_VERTEX_BYTES >= size_of::<ClipVertex<FurVaryings>>() as u64);
+    }
     use std::path::Path;
 
     fn scene(text: &str) -> Scene {

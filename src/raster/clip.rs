@@ -60,6 +60,15 @@ fn outcode(p: Vec4) -> u8 {
     code
 }
 
+/// Whether [`clip_triangle`] emits `triangle` itself, unchanged (finite and inside every
+/// plane): the common case, whose vertices the rasterizer keeps by index.
+#[inline]
+pub fn needs_no_clipping<V: Varyings>(triangle: &[ClipVertex<V>; 3]) -> bool {
+    triangle
+        .iter()
+        .all(|v| v.position.is_finite() && outcode(v.position) == 0)
+}
+
 /// Clips one triangle and hands each resulting triangle (a fan over the clipped polygon, in
 /// the input winding) to `emit`. Returns nothing; a fully outside or non-finite triangle emits
 /// nothing.

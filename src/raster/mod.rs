@@ -58,6 +58,14 @@ pub enum RasterError {
         /// Vertices supplied.
         vertex_count: usize,
     },
+    /// A draw with more vertices than its triangles' corners can index.
+    #[error("a draw has {count} vertices; at most {limit} are supported")]
+    TooManyVertices {
+        /// Vertices supplied.
+        count: usize,
+        /// The largest accepted count.
+        limit: usize,
+    },
     /// A texture with no texels or mismatched data.
     #[error("texture {width}×{height} needs {expected} texels, got {actual}")]
     TextureSize {

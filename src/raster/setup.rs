@@ -165,6 +165,19 @@ pub fn setup_triangle<V: Varyings>(
     height: u32,
     cull: CullMode,
 ) -> Option<(SetupTriangle, [V; 3])> {
+    setup_triangle_order(triangle, width, height, cull)
+        .map(|(set_up, order)| (set_up, order.map(|i| triangle[i].varyings)))
+}
+
+/// [`setup_triangle`] giving, instead of the reordered varyings, which input vertex each of
+/// the set-up triangle's corners is (`[0, 1, 2]` or, for a flipped front face, `[0, 2, 1]`):
+/// the rasterizer keeps vertex indices rather than copies of the varyings.
+pub fn setup_triangle_order<V: Varyings>(
+    triangle: &[ClipVertex<V>; 3],
+    width: u32,
+    height: u32,
+    cull: CullMode,
+) -> Option<(SetupTriangle, [usize; 3])> {
     // Setup's overflow bound holds for clipped triangles; anything else (a caller that did not
     // clip) is refused rather than allowed to overflow the fixed-point arithmetic.
     if !triangle.iter().all(|v| within_guard_band(v.position)) {
@@ -201,7 +214,7 @@ pub fn setup_triangle<V: Varyings>(
             inv_w: order.map(|i| snapped[i].2),
             front_facing,
         },
-        order.map(|i| triangle[i].varyings),
+        order,
     ))
 }
 

@@ -181,7 +181,7 @@ impl std::ops::AddAssign for RasterStats {
 #[inline(always)]
 pub(crate) fn rasterize_triangle<V, S>(
     tri: &SetupTriangle,
-    varyings: &[V; 3],
+    varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
     target: &mut TileTarget,
@@ -218,7 +218,7 @@ const YES: u8 = 2;
 #[inline(always)]
 fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     tri: &SetupTriangle,
-    varyings: &[V; 3],
+    varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
     target: &mut TileTarget,
@@ -242,7 +242,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
     let x_start = r.x0 & !1;
     let (mut shaded, mut written) = (0u64, 0u64);
-    let mut quad = [varyings[0]; 4];
+    let mut quad = [*varyings[0]; 4];
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
@@ -297,11 +297,11 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
             let z = z.to_array();
             for (lane, q) in quad.iter_mut().enumerate() {
                 *q = V::weighted_sum(
-                    &varyings[0],
+                    varyings[0],
                     b[0][lane],
-                    &varyings[1],
+                    varyings[1],
                     b[1][lane],
-                    &varyings[2],
+                    varyings[2],
                     b[2][lane],
                 );
             }
