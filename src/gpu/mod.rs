@@ -377,7 +377,9 @@ impl GpuContext {
         let source = options.shader.as_deref().unwrap_or(SHADER_SOURCE);
         let source = match self.api {
             Api::Vulkan => source.to_string(),
-            Api::Gl => translate::without_level_query(source)?,
+            Api::Gl => {
+                translate::with_uniform_level_loads(&translate::without_level_query(source)?)?
+            }
         };
         let listed = self.blending == Blending::FragmentLists;
         let source = if listed {
