@@ -399,3 +399,49 @@ fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
         resource: buffer.as_entire_binding(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+    fn validate(source: &str) -> naga::Module {
+        let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{e}"));
+        Validator::new(ValidationFlags::all(), Capabilities::all())
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        module
+    }
+
+    #[test]
+    fn the_list_variant_of_the_gl_shader_is_valid_with_its_entry_points() {
+        let gl = crate::gpu::translate::without_level_query(crate::gpu::SHADER_SOURCE)
+            .and_then(|s| crate::gpu::translate::with_uniform_level_loads(&s))
+            .and_then(|s| with_fragment_lists(&s))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let module = validate(&gl);
+        let names: Vec<&str> = module
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
+        for name in [
+            "vs_skin",
+            "vs_shell",
+            "vs_fin",
+            "fs_skin_bits",
+            "fs_fur_listed",
+        ] {
+            assert!(names.contains(&name), "{name} missing from {names:?}");
+        }
+        assert!(!names.contains(&"fs_fur") && !names.contains(&"fs_skin"));
+        let resolve = validate(RESOLVE_SOURCE);
+        assert_eq!(resolve.entry_points.len(), 2);
+    }
+
+    #[test]
+    fn a_shader_without_the_fragment_entry_points_is_refused() {
+        let e = with_fragment_lists("fn main() {}").expect_err("nothing to turn into lists");
+        assert!(e.to_string().contains("fs_skin"), "{e}");
+    }
+}
