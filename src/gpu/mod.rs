@@ -17,11 +17,14 @@
 //! - **The GPU's own**: rasterization, clipping and perspective-correct interpolation; the
 //!   sampler's trilinear filter (at the level of detail the shader computes from coarse
 //!   derivatives, as the oracle does; the surface maps are read with the oracle's own f32
-//!   bilinear weights instead, see `sample_map`); `pow`, `log2`, `sqrt`; blending. The colour target is
-//!   `Rgba32Float` when the adapter can blend it (lavapipe can), else `Rgba16Float`; it is read
-//!   back and rounded to 8 bits on the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
+//!   bilinear weights instead, see `sample_map`); `pow`, `log2`, `sqrt`; blending. The frame is
+//!   blended in f32 ([`Blending`]): by the blend unit into an `Rgba32Float` target where the
+//!   adapter can blend one (lavapipe can), else by a shader through per-pixel fragment lists
+//!   resolved in draw and primitive order (`lists.rs`; wgpu's GL backend on Mesa), else, as a
+//!   last resort, by the blend unit into `Rgba16Float`. It is read back and rounded to 8 bits on
+//!   the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
 //!
-//! Adapters: Vulkan, or OpenGL ES through EGL ([`Api::Gl`]). By default the CPU adapter (Mesa's
+//! Adapters: Vulkan, or OpenGL through EGL ([`Api::Gl`]). By default the CPU adapter (Mesa's
 //! lavapipe, llvmpipe on GL) is preferred, so the comparison is the same on every machine; with
 //! [`AdapterChoice::Any`] the first adapter wgpu's default choice gives (a hardware GPU where
 //! there is one), with [`AdapterChoice::Index`] or [`AdapterChoice::Name`] one of [`adapters`].
@@ -105,9 +108,12 @@ pub enum Api {
     /// Vulkan (Mesa's lavapipe by default).
     #[default]
     Vulkan,
-    /// OpenGL ES through EGL (Mesa's llvmpipe headless by default); the shader is the same
-    /// WGSL with the mip level count computed instead of queried
-    /// ([`translate::without_level_query`]: GLSL ES has no level query).
+    /// OpenGL through EGL (Mesa's llvmpipe headless by default; wgpu opens a desktop OpenGL
+    /// 3.3+ core context where EGL offers one, as Mesa does, else OpenGL ES 3). The shader is
+    /// the same WGSL with the mip level count computed instead of queried
+    /// ([`translate::without_level_query`]: GLSL ES has no level query) and the shadow lookups'
+    /// levels loaded one at a time ([`translate::with_uniform_level_loads`]); the frame is
+    /// blended through fragment lists where `Rgba32Float` cannot be blended ([`Blending`]).
     Gl,
 }
 
