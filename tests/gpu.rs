@@ -241,6 +241,7 @@ fn perturbed(from: &str, to: &str) -> GpuOptions {
     );
     GpuOptions {
         shader: Some(SHADER_SOURCE.replace(from, to)),
+        ..GpuOptions::default()
     }
 }
 
@@ -452,6 +453,38 @@ fn a_frame_set_up_once_draws_the_same_image_every_time() {
 #[test]
 fn a_frame_set_up_once_draws_the_same_image_every_time_on_gl() {
     draws_the_same_image_every_time(&gl_context());
+}
+
+/// A draw that lists more fragments than the lists hold is an error naming the count, never a
+/// wrong image; with room for them the same frame draws.
+#[test]
+fn fragment_lists_that_overflow_are_an_error() {
+    let context = gl_context();
+    let (scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/torus.toml"));
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    let small = GpuOptions {
+        list_capacity: Some(1000),
+        ..GpuOptions::default()
+    };
+    let e = context
+        .render(&prepared, scene.time, &small)
+        .expect_err("a shell covers more than 1000 pixels");
+    let message = e.to_string();
+    assert!(
+        message.contains("more than the 1000 the fragment lists hold"),
+        "{message}"
+    );
+    let roomy = GpuOptions {
+        list_capacity: Some(scene.image.width * scene.image.height * 4),
+        ..GpuOptions::default()
+    };
+    let default = context
+        .render(&prepared, scene.time, &GpuOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let with_room = context
+        .render(&prepared, scene.time, &roomy)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(with_room == default);
 }
 
 fn draws_the_same_image_every_time(context: &GpuContext) {

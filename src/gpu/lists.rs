@@ -23,7 +23,7 @@
 //! pixel), so a pixel's fragments of one draw have distinct primitive indices.
 //!
 //! Each draw's lists hold at most [`Lists::capacity`] fragments (four per pixel, less where the
-//! device's storage buffers are smaller); a draw that lists more is reported by
+//! device's storage buffers are smaller, or `GpuOptions::list_capacity`); a draw that lists more is reported by
 //! [`super::GpuFrame::read_back`] as an error naming the count, never drawn wrong.
 
 /// The entry points and bindings added to `fur.wgsl` for the lists (group 2).
@@ -204,12 +204,13 @@ impl Lists {
     }
 
     /// The buffers for a `width` × `height` frame, bound to `fur_layout`'s group and to the
-    /// resolve pipelines.
+    /// resolve pipelines; `capacity` (fragments per draw) lowers the default.
     pub fn new(
         device: &wgpu::Device,
         fur_layout: &wgpu::BindGroupLayout,
         width: u32,
         height: u32,
+        capacity: Option<u32>,
     ) -> Lists {
         use wgpu::util::DeviceExt;
         let pixels = u64::from(width) * u64::from(height);
@@ -219,7 +220,7 @@ impl Lists {
             .min(device.limits().max_buffer_size);
         let capacity = (pixels * FRAGMENTS_PER_PIXEL)
             .min(limit / FRAGMENT_BYTES)
-            .min(u64::from(u32::MAX - 1)) as u32;
+            .min(u64::from(capacity.unwrap_or(u32::MAX - 1))) as u32;
         let heads = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("list heads"),
             size: (2 + pixels) * 4,

@@ -175,6 +175,10 @@ fn describe(list: &[wgpu::AdapterInfo]) -> String {
 pub struct GpuOptions {
     /// WGSL source replacing [`SHADER_SOURCE`] (tests change one term on purpose with it).
     pub shader: Option<String>,
+    /// With [`Blending::FragmentLists`], the most fur fragments one draw may list; `None`: four
+    /// per pixel, within the device's storage buffer limit. A draw that lists more makes
+    /// [`GpuFrame::read_back`] fail, saying how many it had.
+    pub list_capacity: Option<u32>,
 }
 
 /// A wgpu device and queue, made once and reused for many frames.
@@ -792,7 +796,13 @@ impl GpuContext {
             depth_or_array_layers: 1,
         };
         let target = match &list_layout {
-            Some(layout) => FrameTarget::Lists(lists::Lists::new(device, layout, width, height)),
+            Some(layout) => FrameTarget::Lists(lists::Lists::new(
+                device,
+                layout,
+                width,
+                height,
+                options.list_capacity,
+            )),
             None => {
                 let texture = device.create_texture(&wgpu::TextureDescriptor {
                     label: Some("colour"),
