@@ -17,11 +17,14 @@
 //! - **The GPU's own**: rasterization, clipping and perspective-correct interpolation; the
 //!   sampler's trilinear filter (at the level of detail the shader computes from coarse
 //!   derivatives, as the oracle does; the surface maps are read with the oracle's own f32
-//!   bilinear weights instead, see `sample_map`); `pow`, `log2`, `sqrt`; blending. The colour target is
-//!   `Rgba32Float` when the adapter can blend it (lavapipe can), else `Rgba16Float`; it is read
-//!   back and rounded to 8 bits on the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
+//!   bilinear weights instead, see `sample_map`); `pow`, `log2`, `sqrt`; blending. The frame is
+//!   blended in f32 ([`Blending`]): by the blend unit into an `Rgba32Float` target where the
+//!   adapter can blend one (lavapipe can), else by a shader through per-pixel fragment lists
+//!   resolved in draw and primitive order (`lists.rs`; wgpu's GL backend on Mesa), else, as a
+//!   last resort, by the blend unit into `Rgba16Float`. It is read back and rounded to 8 bits on
+//!   the CPU with the oracle's rule `⌊255·clamp(c) + 0.5⌋`.
 //!
-//! Adapters: Vulkan, or OpenGL ES through EGL ([`Api::Gl`]). By default the CPU adapter (Mesa's
+//! Adapters: Vulkan, or OpenGL through EGL ([`Api::Gl`]). By default the CPU adapter (Mesa's
 //! lavapipe, llvmpipe on GL) is preferred, so the comparison is the same on every machine; with
 //! [`AdapterChoice::Any`] the first adapter wgpu's default choice gives (a hardware GPU where
 //! there is one), with [`AdapterChoice::Index`] or [`AdapterChoice::Name`] one of [`adapters`].
@@ -33,6 +36,7 @@ use glam::{Mat4, Vec3, Vec4};
 use image::RgbaImage;
 use wgpu::util::DeviceExt;
 
+mod lists;
 pub mod translate;
 
 /// The WGSL source of the fur shaders (entry points `vs_skin`, `fs_skin`, `vs_shell`, `vs_fin`,
@@ -104,9 +108,12 @@ pub enum Api {
     /// Vulkan (Mesa's lavapipe by default).
     #[default]
     Vulkan,
-    /// OpenGL ES through EGL (Mesa's llvmpipe headless by default); the shader is the same
-    /// WGSL with the mip level count computed instead of queried
-    /// ([`translate::without_level_query`]: GLSL ES has no level query).
+    /// OpenGL through EGL (Mesa's llvmpipe headless by default; wgpu opens a desktop OpenGL
+    /// 3.3+ core context where EGL offers one, as Mesa does, else OpenGL ES 3). The shader is
+    /// the same WGSL with the mip level count computed instead of queried
+    /// ([`translate::without_level_query`]: GLSL ES has no level query) and the shadow lookups'
+    /// levels loaded one at a time ([`translate::with_uniform_level_loads`]); the frame is
+    /// blended through fragment lists where `Rgba32Float` cannot be blended ([`Blending`]).
     Gl,
 }
 
@@ -168,6 +175,10 @@ fn describe(list: &[wgpu::AdapterInfo]) -> String {
 pub struct GpuOptions {
     /// WGSL source replacing [`SHADER_SOURCE`] (tests change one term on purpose with it).
     pub shader: Option<String>,
+    /// With [`Blending::FragmentLists`], the most fur fragments one draw may list; `None`: four
+    /// per pixel, within the device's storage buffer limit. A draw that lists more makes
+    /// [`GpuFrame::read_back`] fail, saying how many it had.
+    pub list_capacity: Option<u32>,
 }
 
 /// A wgpu device and queue, made once and reused for many frames.
@@ -176,7 +187,22 @@ pub struct GpuContext {
     queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
     target_format: wgpu::TextureFormat,
+    blending: Blending,
     api: Api,
+}
+
+/// How the fur's layers are blended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Blending {
+    /// By the blend unit, into an `Rgba32Float` target (lavapipe on Vulkan).
+    Float32,
+    /// By a shader, in f32, through per-pixel fragment lists resolved in draw and primitive
+    /// order: where the adapter cannot blend `Rgba32Float` but can list fragments (wgpu's GL
+    /// backend on Mesa's llvmpipe; `lists.rs` says how).
+    FragmentLists,
+    /// By the blend unit, into an `Rgba16Float` target: the last resort (half floats round the
+    /// blended colour at every layer).
+    Float16,
 }
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -251,21 +277,33 @@ impl GpuContext {
             }
         };
         let info = adapter.get_info();
-        let blendable = adapter
-            .features()
-            .contains(wgpu::Features::FLOAT32_BLENDABLE);
-        let (features, target_format) = if blendable {
-            (
-                wgpu::Features::FLOAT32_BLENDABLE,
-                wgpu::TextureFormat::Rgba32Float,
-            )
+        let (mut features, mut target_format) = target_choice(&adapter);
+        let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+        let list_features =
+            wgpu::Features::PRIMITIVE_INDEX | wgpu::Features::SHADER_EARLY_DEPTH_TEST;
+        let list_flags =
+            wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::FRAGMENT_WRITABLE_STORAGE;
+        let blending = if target_format == wgpu::TextureFormat::Rgba32Float {
+            Blending::Float32
+        } else if adapter.features().contains(list_features)
+            && adapter
+                .get_downlevel_capabilities()
+                .flags
+                .contains(list_flags)
+        {
+            features |= list_features;
+            target_format = wgpu::TextureFormat::Rgba32Float;
+            let offered = adapter.limits();
+            limits.max_storage_buffer_binding_size = offered.max_storage_buffer_binding_size;
+            limits.max_buffer_size = offered.max_buffer_size;
+            Blending::FragmentLists
         } else {
-            (wgpu::Features::empty(), wgpu::TextureFormat::Rgba16Float)
+            Blending::Float16
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("pelage"),
             required_features: features,
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
+            required_limits: limits,
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
@@ -274,6 +312,7 @@ impl GpuContext {
             queue,
             info,
             target_format,
+            blending,
             api,
         })
     }
@@ -288,9 +327,15 @@ impl GpuContext {
         &self.info
     }
 
-    /// The colour target format (`Rgba32Float` when blendable, else `Rgba16Float`).
+    /// The format the frame is blended in: `Rgba32Float` (by the blend unit, or by a shader
+    /// through fragment lists), else `Rgba16Float`.
     pub fn target_format(&self) -> wgpu::TextureFormat {
         self.target_format
+    }
+
+    /// How the layers are blended.
+    pub fn blending(&self) -> Blending {
+        self.blending
     }
 
     /// Draws `prepared` at `time` (seconds): the skin, the shells root to tip, the fins.
@@ -340,13 +385,17 @@ impl GpuContext {
             return Err(GpuError::Scene("the mesh has no triangles".into()));
         }
         let source = options.shader.as_deref().unwrap_or(SHADER_SOURCE);
-        let gl_source;
         let source = match self.api {
-            Api::Vulkan => source,
+            Api::Vulkan => source.to_string(),
             Api::Gl => {
-                gl_source = translate::without_level_query(source)?;
-                gl_source.as_str()
+                translate::with_uniform_level_loads(&translate::without_level_query(source)?)?
             }
+        };
+        let listed = self.blending == Blending::FragmentLists;
+        let source = if listed {
+            lists::with_fragment_lists(&source)?
+        } else {
+            source
         };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("fur.wgsl"),
@@ -604,10 +653,15 @@ impl GpuContext {
             None => None,
         };
 
-        // Pipelines.
+        // Pipelines (with the fragment lists, group 2 holds them).
+        let list_layout = listed.then(|| lists::Lists::fur_layout(device));
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("fur"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&layer_layout)],
+            bind_group_layouts: &[
+                Some(&frame_layout),
+                Some(&layer_layout),
+                list_layout.as_ref(),
+            ][..if listed { 3 } else { 2 }],
             immediate_size: 0,
         });
         let mesh_attributes = wgpu::vertex_attr_array![
@@ -641,13 +695,24 @@ impl GpuContext {
                 operation: wgpu::BlendOperation::Add,
             },
         };
+        // `target`: the colour target's format and blend; `None` for a fur draw into the
+        // fragment lists (no colour target).
         let pipeline = |vs: &str,
                         fs: &str,
                         vertex: &wgpu::VertexBufferLayout,
-                        blend: Option<wgpu::BlendState>,
+                        target: Option<(wgpu::TextureFormat, Option<wgpu::BlendState>)>,
                         depth_compare: wgpu::CompareFunction,
                         depth_write: bool,
                         cull: Option<wgpu::Face>| {
+            let targets: Vec<Option<wgpu::ColorTargetState>> = target
+                .map(|(format, blend)| wgpu::ColorTargetState {
+                    format,
+                    blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })
+                .into_iter()
+                .map(Some)
+                .collect();
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(vs),
                 layout: Some(&layout),
@@ -675,39 +740,50 @@ impl GpuContext {
                     module: &module,
                     entry_point: Some(fs),
                     compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: self.target_format,
-                        blend,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
+                    targets: &targets,
                 }),
                 multiview_mask: None,
                 cache: None,
             })
         };
+        let (skin_fs, skin_target, fur_fs, fur_target) = if listed {
+            (
+                "fs_skin_bits",
+                (lists::SKIN_FORMAT, None),
+                "fs_fur_listed",
+                None,
+            )
+        } else {
+            (
+                "fs_skin",
+                (self.target_format, None),
+                "fs_fur",
+                Some((self.target_format, Some(alpha_blend))),
+            )
+        };
         let skin_pipeline = pipeline(
             "vs_skin",
-            "fs_skin",
+            skin_fs,
             &mesh_vertex,
-            None,
+            Some(skin_target),
             wgpu::CompareFunction::Less,
             true,
             Some(wgpu::Face::Back),
         );
         let shell_pipeline = pipeline(
             "vs_shell",
-            "fs_fur",
+            fur_fs,
             &mesh_vertex,
-            Some(alpha_blend),
+            fur_target,
             wgpu::CompareFunction::LessEqual,
             false,
             Some(wgpu::Face::Back),
         );
         let fin_pipeline = pipeline(
             "vs_fin",
-            "fs_fur",
+            fur_fs,
             &fin_vertex,
-            Some(alpha_blend),
+            fur_target,
             wgpu::CompareFunction::LessEqual,
             false,
             None,
@@ -719,16 +795,29 @@ impl GpuContext {
             height,
             depth_or_array_layers: 1,
         };
-        let target = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("colour"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: self.target_format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let target = match &list_layout {
+            Some(layout) => FrameTarget::Lists(lists::Lists::new(
+                device,
+                layout,
+                width,
+                height,
+                options.list_capacity,
+            )),
+            None => {
+                let texture = device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("colour"),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: self.target_format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                    view_formats: &[],
+                });
+                let view = texture.create_view(&Default::default());
+                FrameTarget::Blended(texture, view)
+            }
+        };
         let depth = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("depth"),
             size,
@@ -739,7 +828,6 @@ impl GpuContext {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
-        let target_view = target.create_view(&Default::default());
         let depth_view = depth.create_view(&Default::default());
         let bg = s.image.background;
         Ok(GpuFrame {
@@ -753,7 +841,6 @@ impl GpuContext {
                 a: 1.0,
             },
             target,
-            target_view,
             depth_view,
             frame_group,
             mesh_buffer,
@@ -853,6 +940,39 @@ impl GpuContext {
     }
 }
 
+/// The colour target and the device features it needs: `Rgba32Float` where the adapter can
+/// blend it, else `Rgba16Float`.
+///
+/// Vulkan (lavapipe) offers `FLOAT32_BLENDABLE`. wgpu's GL backend never offers that feature;
+/// it reports each format's abilities itself (`TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`,
+/// always offered on GL), and calls `Rgba32Float` renderable and blendable only when the
+/// context lists `GL_EXT_color_buffer_float` or `GL_ARB_color_buffer_float`. On EGL, wgpu
+/// opens a desktop OpenGL 3.3+ core context whenever EGL offers desktop GL (Mesa does: 4.5
+/// core on llvmpipe), and a core profile lists neither extension (float colour buffers are
+/// core since OpenGL 3.0; Mesa lists the ARB one in compatibility profiles only), so through
+/// wgpu 30 `Rgba32Float` is not even renderable on Mesa's GL. The check stays general: a
+/// driver whose GL context lists the extension gets the 32-bit target here.
+fn target_choice(adapter: &wgpu::Adapter) -> (wgpu::Features, wgpu::TextureFormat) {
+    let float32 = wgpu::TextureFormat::Rgba32Float;
+    let offered = adapter.features();
+    if offered.contains(wgpu::Features::FLOAT32_BLENDABLE) {
+        return (wgpu::Features::FLOAT32_BLENDABLE, float32);
+    }
+    let specific = wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
+    let reported = adapter.get_texture_format_features(float32);
+    if offered.contains(specific)
+        && reported
+            .flags
+            .contains(wgpu::TextureFormatFeatureFlags::BLENDABLE)
+        && reported
+            .allowed_usages
+            .contains(wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC)
+    {
+        return (specific, float32);
+    }
+    (wgpu::Features::empty(), wgpu::TextureFormat::Rgba16Float)
+}
+
 /// Waits for `submission` (all work when `None`). wgpu's GL backend turns "no timeout" into
 /// `glClientWaitSync`'s largest, about 2.1 s, which a large frame on llvmpipe can pass: a wait
 /// that times out is repeated (up to ten minutes in all) instead of failing.
@@ -872,6 +992,13 @@ fn wait(device: &wgpu::Device, submission: Option<wgpu::SubmissionIndex>) -> Res
     ))
 }
 
+/// Where a frame is blended: a colour target (and its view) blended by the blend unit, or the
+/// fragment lists.
+enum FrameTarget {
+    Blended(wgpu::Texture, wgpu::TextureView),
+    Lists(lists::Lists),
+}
+
 /// A fin pass of a frame: vertices, indices, index count, layer bind group.
 type FinDraw = (wgpu::Buffer, wgpu::Buffer, u32, wgpu::BindGroup);
 
@@ -883,8 +1010,7 @@ pub struct GpuFrame<'a> {
     width: u32,
     height: u32,
     background: wgpu::Color,
-    target: wgpu::Texture,
-    target_view: wgpu::TextureView,
+    target: FrameTarget,
     depth_view: wgpu::TextureView,
     frame_group: wgpu::BindGroup,
     mesh_buffer: wgpu::Buffer,
@@ -932,10 +1058,14 @@ impl GpuFrame<'_> {
     }
 
     fn encode_pass(&self, encoder: &mut wgpu::CommandEncoder) {
+        let target_view = match &self.target {
+            FrameTarget::Blended(_, view) => view,
+            FrameTarget::Lists(lists) => return self.encode_lists(encoder, lists),
+        };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("fur"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.target_view,
+                view: target_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -980,7 +1110,172 @@ impl GpuFrame<'_> {
         }
     }
 
+    /// The frame through the fragment lists (`lists.rs`): the skin into its target of bits,
+    /// then each fur draw in its own pass, its lists resolved after it.
+    fn encode_lists(&self, encoder: &mut wgpu::CommandEncoder, lists: &lists::Lists) {
+        // The background's f32 bits as the integer clear value of the Rgba32Uint target
+        // (exact: a u32 fits an f64).
+        let bits = |c: f64| f64::from((c as f32).to_bits());
+        let bg = self.background;
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("skin"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &lists.skin_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: bits(bg.r),
+                            g: bits(bg.g),
+                            b: bits(bg.b),
+                            a: bits(bg.a),
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.frame_group, &[]);
+            pass.set_bind_group(2, &lists.fur_group, &[]);
+            pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
+            pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.set_pipeline(&self.skin_pipeline);
+            pass.set_bind_group(1, &self.skin_group, &[]);
+            pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
+        }
+        lists.start(encoder);
+        lists.clear_all(encoder);
+        // A fur draw: depth tested against the skin (not written), no colour target.
+        let fur_pass = |encoder: &mut wgpu::CommandEncoder,
+                        pipeline: &wgpu::RenderPipeline,
+                        group: &wgpu::BindGroup,
+                        vertices: &wgpu::Buffer,
+                        indices: &wgpu::Buffer,
+                        count: u32| {
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("fur"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &self.depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &self.frame_group, &[]);
+                pass.set_bind_group(1, group, &[]);
+                pass.set_bind_group(2, &lists.fur_group, &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..count, 0, 0..1);
+            }
+            lists.resolve(encoder);
+        };
+        // Fins at the silhouette, before the shells (as the oracle draws them).
+        if let Some((vertices, indices, count, group)) = &self.fin {
+            fur_pass(
+                encoder,
+                &self.fin_pipeline,
+                group,
+                vertices,
+                indices,
+                *count,
+            );
+        }
+        // Shells, root to tip (thesis 3.1.4).
+        for group in &self.shell_groups {
+            fur_pass(
+                encoder,
+                &self.shell_pipeline,
+                group,
+                &self.mesh_buffer,
+                &self.index_buffer,
+                self.mesh_index_count,
+            );
+        }
+    }
+
+    /// Maps `buffer` (`COPY_DST | MAP_READ`) after the copies in `encoder` and returns its bytes.
+    fn map_read(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        buffer: &wgpu::Buffer,
+    ) -> Result<Vec<u8>, GpuError> {
+        let device = &self.context.device;
+        self.context.queue.submit([encoder.finish()]);
+        let slice = buffer.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = sender.send(r);
+        });
+        wait(device, None)?;
+        receiver
+            .recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+
+    /// The frame of the fragment lists: its f32 colours, and the check that no draw listed
+    /// more fragments than the lists hold.
+    fn read_back_lists(&self, lists: &lists::Lists) -> Result<RgbaImage, GpuError> {
+        let device = &self.context.device;
+        let colour_bytes = u64::from(self.width) * u64::from(self.height) * 16;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: colour_bytes + 8,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&lists.frame_colour, 0, &readback, 0, colour_bytes);
+        encoder.copy_buffer_to_buffer(&lists.heads, 0, &readback, colour_bytes, 8);
+        let data = self.map_read(encoder, &readback)?;
+        let word =
+            |at: usize| u32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]);
+        let wanted = word(colour_bytes as usize + 4);
+        if wanted > 0 {
+            return Err(GpuError::Scene(format!(
+                "one draw has {wanted} fur fragments, more than the {} the fragment lists hold at {}×{} (the device's storage buffer limit); render smaller",
+                lists.capacity, self.width, self.height
+            )));
+        }
+        let rgba: Vec<u8> = data[..colour_bytes as usize]
+            .chunks_exact(4)
+            .map(|c| to_unorm8(f32::from_le_bytes([c[0], c[1], c[2], c[3]])))
+            .collect();
+        RgbaImage::from_raw(self.width, self.height, rgba)
+            .ok_or_else(|| GpuError::Readback("short image".into()))
+    }
+
     fn read_back_inner(&self) -> Result<RgbaImage, GpuError> {
+        let target = match &self.target {
+            FrameTarget::Blended(texture, _) => texture,
+            FrameTarget::Lists(lists) => return self.read_back_lists(lists),
+        };
         let device = &self.context.device;
         let (width, height) = (self.width, self.height);
         let size = wgpu::Extent3d {
@@ -1003,7 +1298,7 @@ impl GpuFrame<'_> {
         });
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
-                texture: &self.target,
+                texture: target,
                 mip_level: 0,
                 origin: wgpu::Origin3d::ZERO,
                 aspect: wgpu::TextureAspect::All,

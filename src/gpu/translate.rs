@@ -230,6 +230,32 @@ pub fn without_level_query(source: &str) -> Result<String, GpuError> {
     Ok(source)
 }
 
+/// `source` with the per-lane mip level of `sample_nearest_level`'s `textureLoad` made uniform
+/// across the lanes: each level of the chain is loaded in turn by the lanes whose level it is.
+/// wgpu's GL backend has naga guard every `texelFetch` with `textureSize(t, level)`, and
+/// llvmpipe answers that query, for a level that differs between the lanes of one SIMD group,
+/// with one lane's level (the bug `sample_nearest_level` already works round for its own size):
+/// the guard then fails for the other lanes and their load reads 0, leaving shadow-free specks
+/// along the lines where the level changes. The texel loaded is the same.
+pub fn with_uniform_level_loads(source: &str) -> Result<String, GpuError> {
+    let from = "    return textureLoad(t, vec2<i32>(x, y), i32(level));\n";
+    let to = "    var texel = vec4<f32>(0.0);
+    for (var l = 0u; l <= u32(max_level); l++) {
+        if (l == level) {
+            texel = textureLoad(t, vec2<i32>(x, y), i32(l));
+        }
+    }
+    return texel;
+";
+    if source.matches(from).count() != 1 {
+        return Err(fail(
+            "GL variant",
+            format!("`{}` not found once", from.trim()),
+        ));
+    }
+    Ok(source.replace(from, to))
+}
+
 fn type_name(module: &Module, ty: naga::Handle<naga::Type>) -> String {
     module.to_ctx().type_to_string(ty)
 }
