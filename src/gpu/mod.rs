@@ -1062,36 +1062,7 @@ impl GpuFrame<'_> {
             FrameTarget::Blended(_, view) => view,
             FrameTarget::Lists(lists) => return self.encode_lists(encoder, lists),
         };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("fur"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(self.background),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &self.frame_group, &[]);
-        pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
-        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-        // The skin: opaque, writes depth.
-        pass.set_pipeline(&self.skin_pipeline);
-        pass.set_bind_group(1, &self.skin_group, &[]);
-        pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
+        let mut pass = self.begin_with_skin(encoder, "fur", target_view, self.background, None);
         // Fins at the silhouette, before the shells (as the oracle draws them).
         if let Some((vertices, indices, count, group)) = &self.fin {
             pass.set_pipeline(&self.fin_pipeline);
@@ -1110,6 +1081,53 @@ impl GpuFrame<'_> {
         }
     }
 
+    /// Begins a render pass that clears `view` to `clear` and the depth to 1, and draws the
+    /// opaque skin in it (writing depth); `lists_group` is the fragment lists' bind group 2,
+    /// where the pipelines have one.
+    fn begin_with_skin<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        view: &wgpu::TextureView,
+        clear: wgpu::Color,
+        lists_group: Option<&wgpu::BindGroup>,
+    ) -> wgpu::RenderPass<'e> {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        if let Some(group) = lists_group {
+            pass.set_bind_group(2, group, &[]);
+        }
+        pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        // The skin: opaque, writes depth.
+        pass.set_pipeline(&self.skin_pipeline);
+        pass.set_bind_group(1, &self.skin_group, &[]);
+        pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
+        pass
+    }
+
     /// The frame through the fragment lists (`lists.rs`): the skin into its target of bits,
     /// then each fur draw in its own pass, its lists resolved after it.
     fn encode_lists(&self, encoder: &mut wgpu::CommandEncoder, lists: &lists::Lists) {
@@ -1117,43 +1135,19 @@ impl GpuFrame<'_> {
         // (exact: a u32 fits an f64).
         let bits = |c: f64| f64::from((c as f32).to_bits());
         let bg = self.background;
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("skin"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &lists.skin_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bits(bg.r),
-                            g: bits(bg.g),
-                            b: bits(bg.b),
-                            a: bits(bg.a),
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &self.frame_group, &[]);
-            pass.set_bind_group(2, &lists.fur_group, &[]);
-            pass.set_vertex_buffer(0, self.mesh_buffer.slice(..));
-            pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-            pass.set_pipeline(&self.skin_pipeline);
-            pass.set_bind_group(1, &self.skin_group, &[]);
-            pass.draw_indexed(0..self.mesh_index_count, 0, 0..1);
-        }
+        let clear = wgpu::Color {
+            r: bits(bg.r),
+            g: bits(bg.g),
+            b: bits(bg.b),
+            a: bits(bg.a),
+        };
+        drop(self.begin_with_skin(
+            encoder,
+            "skin",
+            &lists.skin_view,
+            clear,
+            Some(&lists.fur_group),
+        ));
         lists.start(encoder);
         lists.clear_all(encoder);
         // A fur draw: depth tested against the skin (not written), no colour target.

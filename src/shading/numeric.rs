@@ -44,82 +44,8 @@ pub(crate) fn sanitize_exponent(p: f32) -> f32 {
 #[inline(always)]
 pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
     let x = saturate(base);
-    let y = sanitize_exponent(exponent);
-    let (lh, ll) = log2_scalar(x);
-    let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
-    // t = y·L as th + tl, th exact (12-bit halves).
-    let yh = mask(y);
-    let yl = y - yh;
-    let lhh = mask(lh);
-    let lhl = lh - lhh;
-    let th = yh * lhh;
-    let tl = (yh * lhl + yl * lh) + y * ll;
-    // 2^t = 2^n · 2^f, n = round(th + tl) (ties to even), f = (th − n) + tl in [−½, ½].
-    let t = th + tl;
-    let shifted = t.max(EXP2_LOWEST) + ROUND_MAGIC;
-    let n = shifted - ROUND_MAGIC;
-    let whole = (shifted.to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
-    let f = (th - n) + tl;
-    let mut p = EXP2_P[5];
-    for c in EXP2_P[..5].iter().rev() {
-        p = c + f * p;
-    }
-    let fraction = 1.0 + f * p;
-    let small = whole < -125;
-    let (whole, scale) = if small {
-        (whole + 64, TWO_POW_MINUS_64)
-    } else {
-        (whole, 1.0)
-    };
-    let mut out =
-        f32::from_bits((fraction.to_bits() as i32).wrapping_add(whole << 23) as u32) * scale;
-    // Underflow (and `y = +inf`, whose `t` is NaN): 0.
-    if t.is_nan() || t < UNDERFLOW_BELOW {
-        out = 0.0;
-    }
-    if x == 0.0 {
-        out = 0.0;
-    }
-    if x == 1.0 {
-        out = 1.0;
-    }
-    if y == 0.0 {
-        out = 1.0;
-    }
-    out
-}
-
-/// `log2 x` of the scalar [`pow01`] in two parts `lh + ll`, the scalar twin of [`Log2x4::new`].
-#[inline(always)]
-fn log2_scalar(x: f32) -> (f32, f32) {
-    let subnormal = x < f32::MIN_POSITIVE;
-    let (xs, bias) = if subnormal {
-        (x * TWO_POW_23, -23.0)
-    } else {
-        (x, 0.0)
-    };
-    let bits = xs.to_bits() as i32;
-    let k = bits.wrapping_sub(SQRT_HALF_BITS) >> 23;
-    let m = f32::from_bits(bits.wrapping_sub(k << 23) as u32);
-    let e = k as f32 + bias;
-    let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
-    let u = m - 1.0;
-    let rv = 1.0 / (m + 1.0);
-    let s = u * rv;
-    let sh = mask(s);
-    let mh = mask(m);
-    let ml = m - mh;
-    let sl = (((u - sh) - sh * mh) - sh * ml) * rv;
-    let z = s * s;
-    let q = LOG2_Q[0] + z * (LOG2_Q[1] + z * LOG2_Q[2]);
-    let tail = (s * z) * q;
-    let rh = LOG2_C_HIGH * sh;
-    let rl = (LOG2_C_LOW * s + LOG2_C_HIGH * sl) + tail;
-    let r = rh + rl;
-    let r_low = rl - (r - rh);
-    let lh = e + r;
-    let ll = (r - (lh - e)) + r_low;
-    (lh, ll)
+    let (lh, ll) = log2_lane(x);
+    exp2_of_product_lane(x, lh, ll, sanitize_exponent(exponent))
 }
 
 /// Four [`pow01`]s at once, each lane bit-identical to `pow01(base[i], exponent[i])`.
@@ -204,7 +130,8 @@ fn saturate_select(x: f32) -> f32 {
     if x > 0.0 { at_most_one } else { 0.0 }
 }
 
-/// [`log2_scalar`] with selects for its branch, for loops over lanes.
+/// `log2 x` of [`pow01`] in two parts `lh + ll` (steps 1 to 3 of [`pow01_x4`]), the scalar
+/// twin of [`Log2x4::new`]; its branch is a select, so that loops of it over lanes vectorise.
 #[inline(always)]
 fn log2_lane(x: f32) -> (f32, f32) {
     let subnormal = x < f32::MIN_POSITIVE;
@@ -235,8 +162,9 @@ fn log2_lane(x: f32) -> (f32, f32) {
     (lh, ll)
 }
 
-/// The second half of [`pow01`] (from `x`'s logarithm `lh + ll` and the sanitised `y`) with
-/// selects for its branches, for loops over lanes.
+/// The second half of [`pow01`] (step 4 of [`pow01_x4`], from `x`'s logarithm `lh + ll` and the
+/// sanitised `y`), the scalar twin of [`exp2_of_product_x4`]; its branches are selects, so
+/// that loops of it over lanes vectorise.
 #[inline(always)]
 fn exp2_of_product_lane(x: f32, lh: f32, ll: f32, y: f32) -> f32 {
     let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
