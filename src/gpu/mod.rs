@@ -1307,20 +1307,7 @@ impl GpuFrame<'_> {
             },
             size,
         );
-        self.context.queue.submit([encoder.finish()]);
-        let slice = readback.slice(..);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = sender.send(r);
-        });
-        wait(device, None)?;
-        receiver
-            .recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = self.map_read(encoder, &readback)?;
         let mut rgba = Vec::with_capacity(width as usize * height as usize * 4);
         for y in 0..height as usize {
             let line = &data[y * row as usize..][..(width * texel_bytes) as usize];
@@ -1334,8 +1321,6 @@ impl GpuFrame<'_> {
                 }
             }
         }
-        drop(data);
-        readback.unmap();
         RgbaImage::from_raw(width, height, rgba)
             .ok_or_else(|| GpuError::Readback("short image".into()))
     }
