@@ -65,6 +65,13 @@ fn folders(dir: &Path, with_error: bool) -> (PathBuf, PathBuf) {
     (r, c)
 }
 
+/// `pelage compare REFERENCES CAPTURES -o OUT` with `options` after it.
+fn compare_folders(r: &Path, c: &Path, out: &Path, options: &[&str]) -> std::process::Output {
+    let mut args = vec!["compare", path(r), path(c), "-o", path(out)];
+    args.extend_from_slice(options);
+    pelage(&args)
+}
+
 fn report_json(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).expect("report.json"))
         .expect("JSON")
@@ -75,7 +82,7 @@ fn folders_are_compared_pair_by_pair_worst_first() {
     let dir = scratch("folders");
     let (r, c) = folders(&dir, false);
     let out = dir.join("report");
-    let o = pelage(&["compare", path(&r), path(&c), "-o", path(&out)]);
+    let o = compare_folders(&r, &c, &out, &[]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     // A reference without a capture and two pairs outside exact: exit 1.
     assert_eq!(o.status.code(), Some(1), "{stdout}");
@@ -125,30 +132,14 @@ fn folders_are_compared_pair_by_pair_worst_first() {
     // has no capture, only the block fails: still 1. A partial tolerance loose enough for
     // everything: 0.
     std::fs::remove_file(r.join("only-ref.png")).expect("rm");
-    let o = pelage(&[
-        "compare",
-        path(&r),
-        path(&c),
-        "-o",
-        path(&out),
-        "--tolerance",
-        "threshold=8,over=0.001",
-    ]);
+    let o = compare_folders(&r, &c, &out, &["--tolerance", "threshold=8,over=0.001"]);
     assert_eq!(o.status.code(), Some(1));
     let json = report_json(&out);
     assert_eq!(
         (json["passed"].as_u64(), json["failed"].as_u64()),
         (Some(3), Some(1))
     );
-    let o = pelage(&[
-        "compare",
-        path(&r),
-        path(&c),
-        "-o",
-        path(&out),
-        "--tolerance",
-        "psnr=5",
-    ]);
+    let o = compare_folders(&r, &c, &out, &["--tolerance", "psnr=5"]);
     assert_eq!(
         o.status.code(),
         Some(0),
@@ -161,16 +152,8 @@ fn folders_are_compared_pair_by_pair_worst_first() {
     for name in ["slight.png", "float.png"] {
         std::fs::remove_file(r.join(name)).expect("rm");
     }
-    let again = [
-        "compare",
-        path(&r),
-        path(&c),
-        "-o",
-        path(&out),
-        "--tolerance",
-        "psnr=5",
-    ];
-    assert_eq!(pelage(&again).status.code(), Some(0));
+    let again = compare_folders(&r, &c, &out, &["--tolerance", "psnr=5"]);
+    assert_eq!(again.status.code(), Some(0));
     let images = std::fs::read_dir(out.join("images"))
         .expect("images")
         .count();
@@ -184,15 +167,7 @@ fn every_pair_of_a_folder_is_held_to_the_memory_limit_before_decoding() {
     let out = dir.join("report");
     // 96×64 images need about 0.7 MB each pair; 100K is below that, so every pair is refused
     // from its headers, named in its row, and the run exits 2.
-    let o = pelage(&[
-        "compare",
-        path(&r),
-        path(&c),
-        "-o",
-        path(&out),
-        "--max-memory",
-        "100K",
-    ]);
+    let o = compare_folders(&r, &c, &out, &["--max-memory", "100K"]);
     assert_eq!(
         o.status.code(),
         Some(2),
@@ -208,7 +183,7 @@ fn every_pair_of_a_folder_is_held_to_the_memory_limit_before_decoding() {
         assert!(error.contains("--max-memory"), "{row}");
     }
     // The default limit lets the same folders through.
-    let o = pelage(&["compare", path(&r), path(&c), "-o", path(&out)]);
+    let o = compare_folders(&r, &c, &out, &[]);
     assert_eq!(o.status.code(), Some(1));
 }
 
@@ -217,7 +192,7 @@ fn a_pair_that_cannot_be_compared_makes_exit_2_and_bad_calls_are_refused() {
     let dir = scratch("errors");
     let (r, c) = folders(&dir, true);
     let out = dir.join("report");
-    let o = pelage(&["compare", path(&r), path(&c), "-o", path(&out)]);
+    let o = compare_folders(&r, &c, &out, &[]);
     assert_eq!(o.status.code(), Some(2));
     let json = report_json(&out);
     assert_eq!(json["rows"][0]["name"], "small");
@@ -287,7 +262,7 @@ fn the_report_page_loads_in_headless_chromium_with_its_rows_and_images() {
     let dir = scratch("chromium");
     let (r, c) = folders(&dir, true);
     let out = dir.join("report");
-    pelage(&["compare", path(&r), path(&c), "-o", path(&out)]);
+    compare_folders(&r, &c, &out, &[]);
     let page = format!("file://{}", path(&out.join("report.html")));
     let o = headless(&browser, &dir.join("profile-dom"))
         .arg("--dump-dom")
