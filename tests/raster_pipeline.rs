@@ -5,7 +5,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use pelage::camera::{look_at, perspective};
 use pelage::raster::{
     AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
-    Framebuffer, Quad, QuadShader, Sampler, Texture,
+    Framebuffer, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture,
 };
 
 const BLENDED: DrawState = DrawState {
@@ -149,14 +149,25 @@ fn draw_layers(layers: &[(f32, Vec4)], state: DrawState) -> Framebuffer {
     fb
 }
 
-/// A quad shader that breaks its contract: it writes every lane, covered or not, twice.
+/// A quad shader that tries to break its contract: it asks for every lane's slot, covered or
+/// not, twice, and writes what it gets.
 struct Greedy;
 
 impl QuadShader<Vec4> for Greedy {
-    fn shade_quad(&self, quad: &Quad<'_, Vec4>, _lanes: u32, mut write: impl FnMut(usize, Vec4)) {
+    type Deferred = ();
+
+    fn shade_quad(
+        &self,
+        _: &mut (),
+        quad: &Quad<'_, Vec4>,
+        mut slots: QuadSlots,
+        mut write: impl FnMut(PixelSlot, Vec4),
+    ) {
         for _ in 0..2 {
             for (lane, colour) in quad.varyings().iter().enumerate() {
-                write(lane, *colour);
+                if let Some(slot) = slots.take(lane) {
+                    write(slot, *colour);
+                }
             }
         }
     }

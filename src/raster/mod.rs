@@ -27,7 +27,7 @@ pub use framebuffer::Framebuffer;
 pub use pipeline::{BlendMode, DepthCompare, DrawState, Frame};
 pub use setup::CullMode;
 pub use texture::{AddressMode, Filter, Sampler, Texture};
-pub use tile::{Fragment, PerFragment, Quad, QuadShader, RasterStats};
+pub use tile::{Fragment, PerFragment, PixelSlot, Quad, QuadShader, QuadSlots, RasterStats};
 pub use varyings::Varyings;
 
 /// What the rasterizer refuses.

@@ -179,6 +179,7 @@ where
             target,
             stats,
         } = self;
+        let mut deferred = S::Deferred::default();
         for chunk in &draw.chunks {
             for &t in &chunk.bins[tile] {
                 let t = t as usize;
@@ -188,6 +189,7 @@ where
                     chunk.corners(t, &draw.vertices),
                     &draw.state,
                     &draw.shader,
+                    &mut deferred,
                     target,
                     stats,
                 );

@@ -650,6 +650,28 @@ impl NearestLookup<'_> {
     }
 }
 
+impl NearestLookup<'_> {
+    /// [`NearestLookup::alpha_x4`] of `N` points, four at a time (`N` a multiple of 4).
+    #[inline(always)]
+    pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
+        let mut out = [0.0; N];
+        for first in (0..N).step_by(4) {
+            let (mut u4, mut v4) = ([0.0; 4], [0.0; 4]);
+            for i in 0..4 {
+                let lane = (first + i).min(N - 1);
+                (u4[i], v4[i]) = (u[lane], v[lane]);
+            }
+            let alphas = self.alpha_x4(u4, v4);
+            for (i, alpha) in alphas.into_iter().enumerate() {
+                if let Some(lane) = out.get_mut(first + i) {
+                    *lane = alpha;
+                }
+            }
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

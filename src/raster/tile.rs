@@ -112,24 +112,92 @@ impl<'q, V: Varyings> Quad<'q, V> {
     }
 }
 
+/// Where the colour of one shaded lane goes: a pixel of the tile that the triangle covers and
+/// whose depth test passed, with the lane's depth. Only the rasterizer makes them, one per
+/// shaded lane, and writing one consumes it (it is neither `Copy` nor `Clone`), so a shader
+/// reaches no pixel the triangle does not cover and writes none twice, whether it writes
+/// during [`QuadShader::shade_quad`] or keeps the slot until [`QuadShader::finish_triangle`].
+#[derive(Debug)]
+pub struct PixelSlot {
+    /// Index into the tile's pixels.
+    index: u32,
+    depth: f32,
+}
+
+/// The slots of one quad's shaded lanes ([`PixelSlot`]), handed out once each.
+#[derive(Debug)]
+pub struct QuadSlots {
+    /// Tile pixel index of lane 0.
+    origin: u32,
+    /// Tile width: lanes 2 and 3 are one row down.
+    row: u32,
+    depth: [f32; 4],
+    /// Lanes whose slot has not been taken.
+    open: u32,
+}
+
+impl QuadSlots {
+    /// The lanes to shade (bit k = lane k is covered and passed the depth test), less those
+    /// whose slot was taken.
+    #[inline(always)]
+    pub fn lanes(&self) -> u32 {
+        self.open
+    }
+
+    /// Lane `lane`'s slot: `None` for a lane not shaded, or taken before.
+    #[inline(always)]
+    pub fn take(&mut self, lane: usize) -> Option<PixelSlot> {
+        let bit = 1u32.checked_shl(lane as u32).unwrap_or(0);
+        if self.open & bit == 0 {
+            return None;
+        }
+        self.open &= !bit;
+        let offset = (lane as u32 & 1) + (lane as u32 >> 1) * self.row;
+        Some(PixelSlot {
+            index: self.origin + offset,
+            depth: self.depth[lane],
+        })
+    }
+}
+
 /// The fragment stage of a draw, one quad at a time, so a shader can share per-quad work (the
 /// level of detail of coarse derivatives) and batch independent lanes through its costliest
 /// terms.
 ///
-/// Contract: the colour given for lane `k` depends only on the quad and the lane — never on
-/// which other lanes are in `lanes` — so a quad shader gives the same pixels as shading each
-/// lane alone.
+/// A shader may also keep lanes of several quads of one triangle in [`QuadShader::Deferred`]
+/// and shade them together: the quads of one triangle cover distinct pixels, so their order
+/// does not matter to the blend, and the rasterizer calls [`QuadShader::finish_triangle`]
+/// before the next triangle touches the tile.
+///
+/// Contract: the colour given for a lane depends only on its quad and the lane — never on
+/// which other lanes are shaded, nor on which lanes share a batch — so a quad shader gives the
+/// same pixels as shading each lane alone.
 ///
 /// Speed: the rasterizer runs a tile's quads in a copy compiled for the frame's
 /// [`crate::simd::SimdLevel`]; mark `shade_quad` `#[inline(always)]` (and what it calls hot,
 /// `#[inline(always)]` or `#[inline]`) so that the fragment stage lands in that copy too, rather
 /// than in one baseline function out of line.
 pub trait QuadShader<V>: Send + Sync {
-    /// Shades the lanes whose bits are set in `lanes` (bit k = lane k is covered and passed the
-    /// depth test) and calls `write(k, colour)` for each lane it keeps; a lane not written is
-    /// discarded. The rasterizer ignores writes to lanes outside `lanes` and repeated writes to
-    /// a lane, so a faulty shader cannot reach a pixel the triangle does not cover.
-    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, write: impl FnMut(usize, Vec4));
+    /// What the shader keeps between the quads of a triangle (`()` for none). One is made per
+    /// tile and draw, and it is empty again after each [`QuadShader::finish_triangle`].
+    type Deferred: Default;
+
+    /// Shades the lanes of `slots` ([`QuadSlots::lanes`]) and writes the colour of each lane
+    /// it keeps to the lane's slot, now or by [`QuadShader::finish_triangle`]; a lane never
+    /// written is discarded.
+    fn shade_quad(
+        &self,
+        deferred: &mut Self::Deferred,
+        quad: &Quad<'_, V>,
+        slots: QuadSlots,
+        write: impl FnMut(PixelSlot, Vec4),
+    );
+
+    /// Writes what `deferred` still holds; called after the last quad of each triangle.
+    #[inline(always)]
+    fn finish_triangle(&self, deferred: &mut Self::Deferred, write: impl FnMut(PixelSlot, Vec4)) {
+        let _ = (deferred, write);
+    }
 }
 
 /// A per-fragment closure as a [`QuadShader`]: called once per lane in the mask.
@@ -140,13 +208,22 @@ where
     V: Varyings,
     F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
 {
+    type Deferred = ();
+
     #[inline(always)]
-    fn shade_quad(&self, quad: &Quad<'_, V>, lanes: u32, mut write: impl FnMut(usize, Vec4)) {
+    fn shade_quad(
+        &self,
+        _: &mut (),
+        quad: &Quad<'_, V>,
+        mut slots: QuadSlots,
+        mut write: impl FnMut(PixelSlot, Vec4),
+    ) {
         for lane in 0..4 {
-            if lanes & (1 << lane) != 0
+            if slots.lanes() & (1 << lane) != 0
                 && let Some(colour) = (self.0)(&quad.fragment(lane))
+                && let Some(slot) = slots.take(lane)
             {
-                write(lane, colour);
+                write(slot, colour);
             }
         }
     }
@@ -184,6 +261,7 @@ pub(crate) fn rasterize_triangle<V, S>(
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
+    deferred: &mut S::Deferred,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
@@ -194,14 +272,14 @@ pub(crate) fn rasterize_triangle<V, S>(
     match (state.depth_compare, state.blend, state.depth_write) {
         // Blended layers over an opaque base (shells, fins): test, no write.
         (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, S, LESS_EQUAL, ALPHA, NO>(
-            tri, varyings, state, shader, target, stats,
+            tri, varyings, state, shader, deferred, target, stats,
         ),
         // Opaque geometry.
-        (D::Less, B::Replace, true) => {
-            rasterize_quads::<V, S, LESS, REPLACE, YES>(tri, varyings, state, shader, target, stats)
-        }
+        (D::Less, B::Replace, true) => rasterize_quads::<V, S, LESS, REPLACE, YES>(
+            tri, varyings, state, shader, deferred, target, stats,
+        ),
         _ => rasterize_quads::<V, S, DYNAMIC, DYNAMIC, DYNAMIC>(
-            tri, varyings, state, shader, target, stats,
+            tri, varyings, state, shader, deferred, target, stats,
         ),
     }
 }
@@ -221,6 +299,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
+    deferred: &mut S::Deferred,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
@@ -339,36 +418,51 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 front_facing: tri.front_facing,
                 varyings: &quad,
             };
-            let mut open = passed;
-            shader.shade_quad(&quad_view, passed, |lane, colour| {
-                let bit = 1u32.checked_shl(lane as u32).unwrap_or(0);
-                if open & bit == 0 {
-                    return;
-                }
-                open &= !bit;
+            let slots = QuadSlots {
+                origin: quad_index as u32,
+                row: tile_width as u32,
+                depth: z,
+                open: passed,
+            };
+            shader.shade_quad(deferred, &quad_view, slots, |slot, colour| {
                 written += 1;
-                let index = quad_index + lane_offsets[lane];
-                let write_depth = match WRITE {
-                    NO => false,
-                    YES => true,
-                    _ => state.depth_write,
-                };
-                if write_depth {
-                    target.depth[index] = z[lane];
-                }
-                let dst = &mut target.colour[index];
-                let mode = match BLEND {
-                    ALPHA => BlendMode::Alpha,
-                    REPLACE => BlendMode::Replace,
-                    _ => state.blend,
-                };
-                *dst = blend(mode, colour, *dst);
+                write_slot::<BLEND, WRITE>(state, target, slot, colour);
             });
             qx += 2;
         }
     }
+    shader.finish_triangle(deferred, |slot, colour| {
+        written += 1;
+        write_slot::<BLEND, WRITE>(state, target, slot, colour);
+    });
     stats.fragments_shaded += shaded;
     stats.fragments_written += written;
+}
+
+/// The depth write and the blend of one shaded lane, with [`rasterize_quads`]'s fixed states.
+#[inline(always)]
+fn write_slot<const BLEND: u8, const WRITE: u8>(
+    state: &DrawState,
+    target: &mut TileTarget,
+    slot: PixelSlot,
+    colour: Vec4,
+) {
+    let index = slot.index as usize;
+    let write_depth = match WRITE {
+        NO => false,
+        YES => true,
+        _ => state.depth_write,
+    };
+    if write_depth {
+        target.depth[index] = slot.depth;
+    }
+    let dst = &mut target.colour[index];
+    let mode = match BLEND {
+        ALPHA => BlendMode::Alpha,
+        REPLACE => BlendMode::Replace,
+        _ => state.blend,
+    };
+    *dst = blend(mode, colour, *dst);
 }
 
 /// The blend equation. `Alpha` is `rgb = src.rgb·a + dst.rgb·(1 − a)` and

@@ -19,15 +19,15 @@
 //! ([`crate::shading::lanes`]). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::{NearestLookup, TrilinearPair, level_of_detail};
-use crate::raster::{Fragment, Quad, QuadShader, Sampler, Texture, Varyings};
+use crate::raster::texture::{MipLevel, TrilinearPair, level_of_detail};
+use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
     AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
     StripeKind,
 };
 use crate::shading::{
     self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
-    Vec3x4,
+    Vec3x4, Vec3x8, Vec3xN,
 };
 use glam::{Vec2, Vec3, Vec4};
 
@@ -586,21 +586,26 @@ pub fn shade_fur(
     }
 }
 
-/// Shades the lanes of one quad set in `lanes` (see [`QuadShader`]): lane by lane the same bits
-/// as [`shade_fur`]. The level of detail of the quad's coarse derivatives is computed once, and
-/// the lit lanes' powers go through [`shading::strand_lighting_x4`] together.
+/// Shades the lanes of one quad ([`QuadSlots::lanes`]): lane by lane the same bits as
+/// [`shade_fur`]. Steps 1–4 run here, with the level of detail of the quad's coarse
+/// derivatives computed once and the spots on the quad's lanes together; a lane that ends
+/// there (discarded, or a debug view's colour) is written at once, and a lit lane goes into
+/// `batch`, which takes the shadow and the lighting of [`LIT_LANES`] lanes at a time.
 ///
 /// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
 /// the rasterizer's tile replay.
 #[inline(always)]
-pub fn shade_fur_quad(
+#[allow(clippy::too_many_arguments)] // the quad, where its lanes go, and the layer's state
+pub fn shade_fur_quad<'a>(
     quad: &Quad<'_, FurVaryings>,
-    lanes: u32,
-    textures: LayerMaps<'_>,
+    mut slots: QuadSlots,
+    batch: &mut LitBatch<'a>,
+    textures: LayerMaps<'a>,
     maps: &SurfaceMaps,
     layer: &LayerParams,
     p: &ShadeParams,
-) -> [Option<Vec4>; 4] {
+    mut write: impl FnMut(PixelSlot, Vec4),
+) {
     let (ddx, ddy) = quad.derivatives(|v| v.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let reads = LevelReads::new(textures, lod);
@@ -609,14 +614,10 @@ pub fn shade_fur_quad(
         |field: fn(&FurVaryings) -> Vec3| Vec3x4::from_lanes(varyings.each_ref().map(field));
     // The burn lobes and the light spots need each lane's unit normal: four at once.
     let unit_normals = lanes_of(|v| v.normal).normalize_or_zero();
-    let mut out = [None; 4];
-    // The lanes that reach the spots, the shadow and the lighting, with what they carry. Lanes
-    // outside `lit` hold zeros (uv 0 is a valid texel for the shadow's lookups): every lane
-    // runs the packed steps below, and only the lit lanes' results are kept.
+    let lanes = slots.lanes();
     let mut lit = 0u32;
     let mut surfaces = [LitSurface::ZERO; 4];
-    let mut pending = 0u32;
-    let (mut shadow_uv, mut shadow_offset) = ([Vec2::ZERO; 4], [Vec2::ZERO; 4]);
+    let mut lookups = [ShadowLookups::Taken(0.0); 4];
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
             continue;
@@ -631,22 +632,20 @@ pub fn shade_fur_quad(
             p,
         ) {
             Surface::Discarded => {}
-            Surface::Finished(colour) => out[lane] = Some(colour),
-            Surface::Lit(l, lookups) => {
+            Surface::Finished(colour) => {
+                if let Some(slot) = slots.take(lane) {
+                    write(slot, colour);
+                }
+            }
+            Surface::Lit(l, shadow) => {
                 lit |= 1 << lane;
                 surfaces[lane] = l;
-                match lookups {
-                    ShadowLookups::Taken(shadow) => surfaces[lane].shadow = shadow,
-                    ShadowLookups::Pending { uv, offset } => {
-                        pending |= 1 << lane;
-                        (shadow_uv[lane], shadow_offset[lane]) = (uv, offset);
-                    }
-                }
+                lookups[lane] = shadow;
             }
         }
     }
     if lit == 0 {
-        return out;
+        return;
     }
     // Step 4's spots on the quad's lanes together.
     if !p.spots.is_empty() {
@@ -660,73 +659,184 @@ pub fn shade_fur_quad(
             surface.strand = strands.lane(lane);
         }
     }
-    // Step 6 for the quad's lanes together: lookup k of every lane in one batch.
-    let shadows = if pending != 0 && layer.lookups > 0 {
-        shading::shell_shadow_lanes(
-            |u, v| reads.shadow.alpha_x4(u, v),
-            shadow_uv,
-            shadow_offset,
-            layer.lookups,
-            p.shadow_texel,
-        )
-    } else {
-        [0.0; 4]
-    };
+    // The shadow's lookups of the lanes in a batch read one level: a quad at another level
+    // lights what the batch holds first, as does a quad whose lanes do not fit. (One call site
+    // of the lighting per copy of the hot path keeps that copy small.)
+    let shadow_level = textures.colour.nearest_level(lod);
+    if !batch.reads_level(shadow_level) || batch.len + lit.count_ones() as usize > LIT_LANES {
+        batch.light(textures.sampler, layer, p, &mut write);
+    }
+    batch.shadow_level = Some(shadow_level);
     for lane in 0..4 {
         if lit & (1 << lane) == 0 {
             continue;
         }
-        let l = &mut surfaces[lane];
-        l.strand = l.burn.strand_colour(l.strand);
-        let shadow = if pending & (1 << lane) != 0 {
-            shadows[lane]
-        } else {
-            l.shadow
+        let Some(slot) = slots.take(lane) else {
+            continue;
         };
-        match shadowed(*l, shadow, p) {
-            Ok(shadowed) => *l = shadowed,
-            Err(finished) => {
-                out[lane] = Some(finished);
-                lit &= !(1 << lane);
+        let l = &surfaces[lane];
+        batch.push(
+            slot,
+            LitSurface {
+                strand: l.burn.strand_colour(l.strand),
+                ..*l
+            },
+            lookups[lane],
+            &varyings[lane],
+        );
+    }
+}
+
+/// Lanes in a [`LitBatch`]: two quads' worth, which plain per-lane loops turn into 256-bit
+/// instructions in the AVX2 copy of the hot path.
+pub const LIT_LANES: usize = 8;
+
+/// Lit fragments of one triangle's quads waiting for steps 5–7 (the shell shadow's lookups,
+/// the lit tangent, strand lighting and eq. 3.7), which run on [`LIT_LANES`] lanes at once, one
+/// array per component. Only lanes that reach the lighting are held, so a batch is full
+/// whatever the quads' coverage, and the lookups of all its lanes read one mip level.
+///
+/// Lane by lane the same bits as [`shade_fur`]: every step is the scalar twin's operations on
+/// each lane, and a lane's result depends on nothing else in the batch.
+#[derive(Default)]
+pub struct LitBatch<'a> {
+    len: usize,
+    /// The mip level the shadow's lookups of the lanes held read.
+    shadow_level: Option<&'a MipLevel>,
+    slots: [Option<PixelSlot>; LIT_LANES],
+    /// Lanes whose shadow's lookups are still to take (the others carry theirs in `shadow`).
+    pending: u32,
+    alpha: [f32; LIT_LANES],
+    shadow: [f32; LIT_LANES],
+    shadow_uv: [Vec2; LIT_LANES],
+    shadow_offset: [Vec2; LIT_LANES],
+    strand: Vec3x8,
+    encoded_tangent: Vec3x8,
+    wind: Vec3x8,
+    lean: Vec3x8,
+    light: Vec3x8,
+    eye: Vec3x8,
+}
+
+/// Sets lane `i` of `lanes` to `v`.
+#[inline(always)]
+fn set_lane(lanes: &mut Vec3x8, i: usize, v: Vec3) {
+    (lanes.x[i], lanes.y[i], lanes.z[i]) = (v.x, v.y, v.z);
+}
+
+impl<'a> LitBatch<'a> {
+    /// Whether lanes whose lookups read `level` may join (the batch is empty or reads it).
+    #[inline(always)]
+    fn reads_level(&self, level: &MipLevel) -> bool {
+        self.len == 0
+            || self
+                .shadow_level
+                .is_some_and(|held| std::ptr::eq(held, level))
+    }
+
+    /// Adds one lit lane; the caller lights the batch when it is full.
+    #[inline(always)]
+    fn push(&mut self, slot: PixelSlot, lit: LitSurface, lookups: ShadowLookups, v: &FurVaryings) {
+        let i = self.len;
+        self.slots[i] = Some(slot);
+        self.alpha[i] = lit.alpha;
+        set_lane(&mut self.strand, i, lit.strand);
+        set_lane(&mut self.encoded_tangent, i, lit.encoded_tangent);
+        (self.shadow[i], self.shadow_uv[i], self.shadow_offset[i]) = match lookups {
+            ShadowLookups::Taken(shadow) => (shadow, Vec2::ZERO, Vec2::ZERO),
+            ShadowLookups::Pending { uv, offset } => {
+                self.pending |= 1 << i;
+                (0.0, uv, offset)
+            }
+        };
+        set_lane(&mut self.wind, i, v.wind);
+        set_lane(&mut self.lean, i, v.lean);
+        set_lane(&mut self.light, i, v.light);
+        set_lane(&mut self.eye, i, v.eye);
+        self.len += 1;
+    }
+
+    /// Steps 5–7 of the lanes held, each colour written to its lane's slot; the batch is
+    /// empty after. Lanes past `len` hold what they held before (or zeros) and run too; their
+    /// results are dropped.
+    #[inline(always)]
+    pub fn light(
+        &mut self,
+        sampler: Sampler,
+        layer: &LayerParams,
+        p: &ShadeParams,
+        mut write: impl FnMut(PixelSlot, Vec4),
+    ) {
+        if self.len == 0 {
+            return;
+        }
+        // Step 6: lookup k of every lane in one batch.
+        if self.pending != 0
+            && layer.lookups > 0
+            && let Some(level) = self.shadow_level
+        {
+            let lookup = sampler.nearest_lookup(level);
+            // `shading::shell_shadow_lanes`, step by step.
+            let mut sums = shading::ShadowLanes::new(
+                self.shadow_uv,
+                self.shadow_offset,
+                layer.lookups,
+                p.shadow_texel,
+            );
+            for k in 1..=layer.lookups {
+                let (u, v) = sums.point(k);
+                sums.add(lookup.alpha_lanes(u, v));
+            }
+            for (i, shadow) in sums.shadow.into_iter().enumerate() {
+                if self.pending & (1 << i) != 0 {
+                    self.shadow[i] = shadow;
+                }
             }
         }
-    }
-    if lit == 0 {
-        return out;
-    }
-    let lighting = shading::strand_lighting_x4(
-        &lit_tangents_x4(
-            &Vec3x4::from_lanes(surfaces.map(|l| l.encoded_tangent)),
-            &lanes_of(|v| v.wind),
-            &lanes_of(|v| v.lean),
-            layer,
-            p,
-        ),
-        &Vec3x4::splat(Vec3::Z),
-        &lanes_of(|v| v.light).normalize_or_zero(),
-        &lanes_of(|v| v.eye).normalize_or_zero(),
-        p.exponents,
-        p.tangents,
-        p.tangent_shift,
-    );
-    // The dampened specular and eq. 3.7 on the four lanes.
-    let colours = shading::final_colour_x4(
-        &Vec3x4::from_lanes(surfaces.map(|l| l.strand)),
-        p.light_colour,
-        p.ambient,
-        lighting.map(|l| l.diffuse),
-        lighting.map(|l| l.specular),
-        shading::dampened_specular_x4(lighting.map(|l| l.specular_to_dampen)),
-        surfaces.map(|l| l.shadow),
-        &p.weights,
-        p.ambient_term,
-    );
-    for lane in 0..4 {
-        if lit & (1 << lane) != 0 {
-            out[lane] = Some(colours.lane(lane).extend(surfaces[lane].alpha));
+        if p.debug_view == DebugView::Shadow {
+            for i in 0..self.len {
+                let g = (1.0 - p.weights.shadow * self.shadow[i]).clamp(0.0, 1.0);
+                if let Some(slot) = self.slots[i].take() {
+                    write(slot, Vec4::new(g, g, g, self.alpha[i]));
+                }
+            }
+            self.clear();
+            return;
         }
+        // Steps 5 and 7.
+        let lighting = shading::strand_lighting_lanes(
+            &lit_tangents_lanes(&self.encoded_tangent, &self.wind, &self.lean, layer, p),
+            &Vec3x8::splat(Vec3::Z),
+            &self.light.normalize_or_zero(),
+            &self.eye.normalize_or_zero(),
+            p.exponents,
+            p.tangents,
+            p.tangent_shift,
+        );
+        let colours = shading::final_colour_lanes(
+            &self.strand,
+            p.light_colour,
+            p.ambient,
+            lighting.diffuse,
+            lighting.specular,
+            shading::dampened_specular_lanes(lighting.specular_to_dampen),
+            self.shadow,
+            &p.weights,
+            p.ambient_term,
+        );
+        for i in 0..self.len {
+            if let Some(slot) = self.slots[i].take() {
+                write(slot, colours.lane(i).extend(self.alpha[i]));
+            }
+        }
+        self.clear();
     }
-    out
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+        self.pending = 0;
+    }
 }
 
 /// Which implementation of the fur fragment stage a frame runs. Both give the same bits; the
@@ -755,29 +865,39 @@ pub struct FurShader<'a> {
     pub stage: FragmentStage,
 }
 
-impl QuadShader<FurVaryings> for FurShader<'_> {
+impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
+    type Deferred = LitBatch<'a>;
+
     #[inline(always)]
     fn shade_quad(
         &self,
+        batch: &mut LitBatch<'a>,
         quad: &Quad<'_, FurVaryings>,
-        lanes: u32,
-        mut write: impl FnMut(usize, Vec4),
+        mut slots: QuadSlots,
+        mut write: impl FnMut(PixelSlot, Vec4),
     ) {
         let (textures, maps, layer, params) = (self.textures, self.maps, &self.layer, self.params);
-        let colours = match self.stage {
-            FragmentStage::Quad => shade_fur_quad(quad, lanes, textures, maps, layer, params),
-            FragmentStage::ScalarTwin => std::array::from_fn(|lane| {
-                let fragment = quad.fragment(lane);
-                (lanes & (1 << lane) != 0)
-                    .then(|| shade_fur(&fragment, textures, maps, layer, params))
-                    .flatten()
-            }),
-        };
-        for (lane, colour) in colours.into_iter().enumerate() {
-            if let Some(colour) = colour {
-                write(lane, colour);
+        match self.stage {
+            FragmentStage::Quad => {
+                shade_fur_quad(quad, slots, batch, textures, maps, layer, params, write)
+            }
+            FragmentStage::ScalarTwin => {
+                for lane in 0..4 {
+                    if slots.lanes() & (1 << lane) != 0
+                        && let Some(colour) =
+                            shade_fur(&quad.fragment(lane), textures, maps, layer, params)
+                        && let Some(slot) = slots.take(lane)
+                    {
+                        write(slot, colour);
+                    }
+                }
             }
         }
+    }
+
+    #[inline(always)]
+    fn finish_triangle(&self, batch: &mut LitBatch<'a>, write: impl FnMut(PixelSlot, Vec4)) {
+        batch.light(self.textures.sampler, &self.layer, self.params, write);
     }
 }
 
@@ -841,20 +961,20 @@ fn lit_tangent(
     }
 }
 
-/// [`lit_tangent`] on the four lanes of a quad, lane by lane the same bits.
+/// [`lit_tangent`] on `N` lanes, lane by lane the same bits.
 #[inline(always)]
-fn lit_tangents_x4(
-    encoded: &Vec3x4,
-    wind: &Vec3x4,
-    lean: &Vec3x4,
+fn lit_tangents_lanes<const N: usize>(
+    encoded: &Vec3xN<N>,
+    wind: &Vec3xN<N>,
+    lean: &Vec3xN<N>,
     layer: &LayerParams,
     p: &ShadeParams,
-) -> Vec3x4 {
+) -> Vec3xN<N> {
     let tangent = encoded
         .scale_minus_one(2.0)
-        .normalize_or(&Vec3x4::splat(Vec3::Z));
+        .normalize_or(&Vec3xN::splat(Vec3::Z));
     let tangent = if p.wind_tangent_fraction > 0.0 {
-        shading::bend_tangent_x4(
+        shading::bend_tangent_lanes(
             &tangent,
             wind,
             layer.height_fraction * p.wind_tangent_fraction,
@@ -863,7 +983,7 @@ fn lit_tangents_x4(
         tangent
     };
     if p.lean {
-        shading::bend_tangent_x4(&tangent, lean, layer.height_fraction)
+        shading::bend_tangent_lanes(&tangent, lean, layer.height_fraction)
     } else {
         tangent
     }
@@ -905,12 +1025,11 @@ impl LitSurface {
 }
 
 /// What a layer's texture reads at one level of detail share, chosen once for the lanes of a
-/// quad: the mip levels of the colour and tangent maps and the shadow's nearest level.
+/// quad: the mip levels of the colour and tangent maps.
 struct LevelReads<'a> {
     lod: f32,
     /// `None` when the colour and tangent maps differ in shape (then read one by one).
     surface: Option<TrilinearPair<'a>>,
-    shadow: NearestLookup<'a>,
 }
 
 impl<'a> LevelReads<'a> {
@@ -920,7 +1039,6 @@ impl<'a> LevelReads<'a> {
         LevelReads {
             lod,
             surface: sampler.trilinear_pair(textures.colour, textures.tangent, lod),
-            shadow: sampler.nearest_lookup(textures.colour.nearest_level(lod)),
         }
     }
 }

@@ -2,11 +2,12 @@
 //! between tangent and light, raised to Banks's exponent; specular from the reflection cone,
 //! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
-use super::lanes::{LANES, Vec3x4};
-use super::numeric::{finite_or_zero, pow01, pow01_x4, pow01_x4_diffuse_specular_dampened};
-use super::tangent_space::{cos_sin_unit, cos_sin_unit_x4};
+use super::lanes::Vec3xN;
+use super::numeric::{
+    finite_or_zero, pow01, pow01_diffuse_specular_dampened_lanes, pow01_lanes, pow01_x4,
+};
+use super::tangent_space::{cos_sin_unit, cos_sin_unit_lanes};
 use glam::Vec3;
-use wide::f32x4;
 
 /// Banks's exponent on the Kajiya–Kay diffuse term, 4.8 (thesis 3.2.3: "the dampening is done
 /// by exponentiating the diffuse value by 4.8 as stated by Banks").
@@ -125,31 +126,37 @@ pub fn strand_lighting(
     }
 }
 
-/// [`strand_lighting`] for four independent fragments (a quad), lane by lane bit-identical to
-/// it: the bases are computed on the four lanes at once ([`Vec3x4`], the same operations per
-/// lane), and each power is taken by lanes of four of the same exponent, three (one tangent)
-/// or five (three tangents) batches for the whole quad instead of four or eight.
+/// [`StrandLighting`] of `N` lanes, one array per term.
+#[derive(Clone, Copy, Debug)]
+pub struct StrandLightingLanes<const N: usize> {
+    /// The diffuse terms.
+    pub diffuse: [f32; N],
+    /// The specular terms.
+    pub specular: [f32; N],
+    /// The specular terms the dampened specular is taken of.
+    pub specular_to_dampen: [f32; N],
+}
+
+/// [`strand_lighting`] for `N` independent fragments (the lit lanes of a batch), lane by lane
+/// bit-identical to it: the bases are computed on the lanes at once ([`Vec3xN`], the same
+/// operations per lane), and each power is taken by lanes of the same exponent, three (one
+/// tangent) or five (three tangents) batches for all lanes instead of three or four per lane.
 #[inline(always)]
-pub fn strand_lighting_x4(
-    tangent: &Vec3x4,
-    normal: &Vec3x4,
-    light: &Vec3x4,
-    eye: &Vec3x4,
+pub fn strand_lighting_lanes<const N: usize>(
+    tangent: &Vec3xN<N>,
+    normal: &Vec3xN<N>,
+    light: &Vec3xN<N>,
+    eye: &Vec3xN<N>,
     exponents: LightingExponents,
     tangents: SpecularTangents,
     shift: f32,
-) -> [StrandLighting; LANES] {
+) -> StrandLightingLanes<N> {
     let t = tangent.normalize_or_zero();
     let l = light.normalize_or_zero();
     let e = eye.normalize_or_zero();
-    let (cos_tl, sin_tl) = cos_sin_unit_x4(&t, &l);
-    let specular_base = |t: &Vec3x4, (cl, sl): ([f32; LANES], [f32; LANES])| {
-        let (ce, se) = cos_sin_unit_x4(t, &e);
-        let [cl, sl, ce, se] = [cl, sl, ce, se].map(f32x4::new);
-        (cl * ce + sl * se).to_array()
-    };
-    let centre = specular_base(&t, (cos_tl, sin_tl));
-    let (diffuse, centre_specular, specular_to_dampen) = pow01_x4_diffuse_specular_dampened(
+    let (cos_tl, sin_tl) = cos_sin_unit_lanes(&t, &l);
+    let centre = specular_base_lanes(&t, &e, cos_tl, sin_tl);
+    let (diffuse, centre_specular, specular_to_dampen) = pow01_diffuse_specular_dampened_lanes(
         sin_tl,
         centre,
         [exponents.banks, exponents.specular, exponents.dampened],
@@ -158,22 +165,55 @@ pub fn strand_lighting_x4(
         SpecularTangents::One => centre_specular,
         SpecularTangents::Three(lobes) => {
             let n = normal.normalize_or_zero();
-            let shifted = |shift: f32| {
-                let t = t
-                    .add_scaled([finite_or_zero(shift); LANES], &n)
-                    .normalize_or_zero();
-                specular_base(&t, cos_sin_unit_x4(&t, &l))
-            };
-            let up = pow01_x4(shifted(shift), [exponents.specular; LANES]);
-            let down = pow01_x4(shifted(-shift), [exponents.specular; LANES]);
-            std::array::from_fn(|i| three_lobe_specular(centre_specular[i], up[i], down[i], lobes))
+            let up = shifted_specular_lanes(&t, &n, &l, &e, shift, exponents.specular);
+            let down = shifted_specular_lanes(&t, &n, &l, &e, -shift, exponents.specular);
+            let mut specular = [0.0; N];
+            for i in 0..N {
+                specular[i] = three_lobe_specular(centre_specular[i], up[i], down[i], lobes);
+            }
+            specular
         }
     };
-    std::array::from_fn(|i| StrandLighting {
-        diffuse: diffuse[i],
-        specular: specular[i],
-        specular_to_dampen: specular_to_dampen[i],
-    })
+    StrandLightingLanes {
+        diffuse,
+        specular,
+        specular_to_dampen,
+    }
+}
+
+/// The specular base of eq. 2.7 on `N` lanes from the tangent's cosine and sine with the
+/// light: `cos(t,l)·cos(t,e) + sin(t,l)·sin(t,e)`, as [`specular_base_unit`].
+#[inline(always)]
+fn specular_base_lanes<const N: usize>(
+    t: &Vec3xN<N>,
+    e: &Vec3xN<N>,
+    cos_tl: [f32; N],
+    sin_tl: [f32; N],
+) -> [f32; N] {
+    let (ce, se) = cos_sin_unit_lanes(t, e);
+    let mut base = [0.0; N];
+    for i in 0..N {
+        base[i] = cos_tl[i] * ce[i] + sin_tl[i] * se[i];
+    }
+    base
+}
+
+/// The specular lobe of the tangent shifted by `shift` along the normal (eq. 3.5), on `N`
+/// lanes of unit vectors: [`shift_tangent`], its base, and the power.
+#[inline(always)]
+fn shifted_specular_lanes<const N: usize>(
+    t: &Vec3xN<N>,
+    n: &Vec3xN<N>,
+    l: &Vec3xN<N>,
+    e: &Vec3xN<N>,
+    shift: f32,
+    exponent: f32,
+) -> [f32; N] {
+    let shifted = t
+        .add_scaled([finite_or_zero(shift); N], n)
+        .normalize_or_zero();
+    let (cos_tl, sin_tl) = cos_sin_unit_lanes(&shifted, l);
+    pow01_lanes(specular_base_lanes(&shifted, e, cos_tl, sin_tl), exponent)
 }
 
 /// The bases of the powers of one fragment's strand lighting, from the inputs normalised once:
@@ -529,7 +569,12 @@ mod tests {
     }
 
     #[test]
-    fn strand_lighting_x4_is_bit_identical_to_four_single_calls() {
+    fn strand_lighting_lanes_are_bit_identical_to_single_calls() {
+        lanes_bit_for_bit::<4>();
+        lanes_bit_for_bit::<8>();
+    }
+
+    fn lanes_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(15);
         let special = [Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::X, -Vec3::Z];
         for k in 0..2000 {
@@ -540,7 +585,7 @@ mod tests {
                     rng.cube()
                 }
             };
-            let (t, n, l, e): ([Vec3; 4], [Vec3; 4], [Vec3; 4], [Vec3; 4]) = (
+            let (t, n, l, e): ([Vec3; N], [Vec3; N], [Vec3; N], [Vec3; N]) = (
                 std::array::from_fn(|_| pick(0)),
                 std::array::from_fn(|_| pick(1)),
                 std::array::from_fn(|_| pick(2)),
@@ -553,24 +598,29 @@ mod tests {
             };
             let shift = rng.range(-0.5, 0.5);
             for tangents in TANGENTS {
-                let quad = strand_lighting_x4(
-                    &Vec3x4::from_lanes(t),
-                    &Vec3x4::from_lanes(n),
-                    &Vec3x4::from_lanes(l),
-                    &Vec3x4::from_lanes(e),
+                let quad = strand_lighting_lanes(
+                    &Vec3xN::from_lanes(t),
+                    &Vec3xN::from_lanes(n),
+                    &Vec3xN::from_lanes(l),
+                    &Vec3xN::from_lanes(e),
                     exponents,
                     tangents,
                     shift,
                 );
-                for lane in 0..4 {
+                for lane in 0..N {
                     let single = strand_lighting(
                         t[lane], n[lane], l[lane], e[lane], exponents, tangents, shift,
                     );
                     let bits = |s: StrandLighting| {
                         [s.diffuse, s.specular, s.specular_to_dampen].map(f32::to_bits)
                     };
+                    let got = StrandLighting {
+                        diffuse: quad.diffuse[lane],
+                        specular: quad.specular[lane],
+                        specular_to_dampen: quad.specular_to_dampen[lane],
+                    };
                     assert_eq!(
-                        bits(quad[lane]),
+                        bits(got),
                         bits(single),
                         "lane {lane} of {t:?} {l:?} {e:?} {exponents:?} {tangents:?}"
                     );

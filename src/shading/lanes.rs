@@ -1,47 +1,89 @@
-//! Four fragments at once (the lanes of a 2×2 quad), one array per vector component; each
-//! operation runs on packed 4-lane registers (`wide::f32x4`: SSE on x86-64, NEON on AArch64,
-//! plain arrays elsewhere).
+//! Fragments side by side, one array per vector component: the four lanes of a 2×2 quad
+//! ([`Vec3x4`]) or the eight lit lanes of a batch ([`Vec3x8`]). Operations are plain per-lane
+//! loops over the arrays, which LLVM turns into packed instructions as wide as the level's
+//! copy of the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON);
+//! the 4-lane helpers `packed`/`from_packed` give `wide::f32x4` registers for code written
+//! with them.
 //!
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the
 //! same bits as the scalar code. No fused multiply-adds, no reassociation, no approximate
-//! reciprocals: Rust never contracts or reorders float operations on its own, and only `wide`'s
-//! correctly rounded operations are used (`+ − × ÷`, `sqrt`, comparisons and `select`; never
-//! its `recip`, `recip_sqrt` or `mul_add`). The tests check
-//! the bits against the twins on random, special and degenerate vectors.
+//! reciprocals: Rust never contracts or reorders float operations on its own, and only
+//! correctly rounded operations are used (`+ − × ÷`, `sqrt`, comparisons and selects; never
+//! `wide`'s `recip`, `recip_sqrt` or `mul_add`). The tests check the bits against the twins on
+//! random, special and degenerate vectors, at 4 and 8 lanes.
+
+// Lanes are indexed loops over several arrays at once: the form LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
 
 use glam::Vec3;
 use wide::f32x4;
 
-/// Lanes per batch: the four fragments of a quad.
+/// Lanes per quad: the four fragments of a 2×2 quad.
 pub const LANES: usize = 4;
 
-/// Four 3-vectors, one array per component.
+/// `N` 3-vectors, one array per component.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Vec3x4 {
+pub struct Vec3xN<const N: usize> {
     /// The x components.
-    pub x: [f32; LANES],
+    pub x: [f32; N],
     /// The y components.
-    pub y: [f32; LANES],
+    pub y: [f32; N],
     /// The z components.
-    pub z: [f32; LANES],
+    pub z: [f32; N],
 }
 
-impl Vec3x4 {
+impl<const N: usize> Default for Vec3xN<N> {
+    /// Zero in every lane.
+    fn default() -> Self {
+        Self::splat(Vec3::ZERO)
+    }
+}
+
+/// The four lanes of a quad.
+pub type Vec3x4 = Vec3xN<LANES>;
+
+/// Eight lanes: a batch of lit fragments.
+pub type Vec3x8 = Vec3xN<8>;
+
+/// `f(a[i], b[i])` for each lane, as a plain loop that vectorises.
+#[inline(always)]
+fn zip_lanes<const N: usize>(a: [f32; N], b: [f32; N], f: impl Fn(f32, f32) -> f32) -> [f32; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        out[i] = f(a[i], b[i]);
+    }
+    out
+}
+
+/// All bits set where `condition` holds, else none: a lane mask for [`select_bits`].
+#[inline(always)]
+pub(crate) fn lane_mask(condition: bool) -> u32 {
+    u32::from(condition).wrapping_neg()
+}
+
+/// `if mask { a } else { b }` for a [`lane_mask`], as bit operations, which loops over lanes
+/// vectorise (LLVM keeps a float `if` in a loop as a branch).
+#[inline(always)]
+pub(crate) fn select_bits(mask: u32, a: f32, b: f32) -> f32 {
+    f32::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
+}
+
+impl<const N: usize> Vec3xN<N> {
     /// The same vector in every lane.
     #[inline(always)]
     pub fn splat(v: Vec3) -> Self {
-        Vec3x4 {
-            x: [v.x; LANES],
-            y: [v.y; LANES],
-            z: [v.z; LANES],
+        Vec3xN {
+            x: [v.x; N],
+            y: [v.y; N],
+            z: [v.z; N],
         }
     }
 
-    /// From four vectors, lane `i` = `v[i]`.
+    /// From `N` vectors, lane `i` = `v[i]`.
     #[inline(always)]
-    pub fn from_lanes(v: [Vec3; LANES]) -> Self {
-        Vec3x4 {
+    pub fn from_lanes(v: [Vec3; N]) -> Self {
+        Vec3xN {
             x: v.map(|v| v.x),
             y: v.map(|v| v.y),
             z: v.map(|v| v.z),
@@ -54,6 +96,97 @@ impl Vec3x4 {
         Vec3::new(self.x[i], self.y[i], self.z[i])
     }
 
+    /// `Vec3::dot`: `(x·x' + y·y') + z·z'`.
+    #[inline(always)]
+    pub fn dot(&self, o: &Self) -> [f32; N] {
+        let mut out = [0.0; N];
+        for i in 0..N {
+            out[i] = (self.x[i] * o.x[i] + self.y[i] * o.y[i]) + self.z[i] * o.z[i];
+        }
+        out
+    }
+
+    /// `self + s·o` per lane (`Vec3 + f32 * Vec3`).
+    #[inline(always)]
+    pub fn add_scaled(&self, s: [f32; N], o: &Self) -> Self {
+        let mut out = *self;
+        for i in 0..N {
+            out.x[i] = self.x[i] + s[i] * o.x[i];
+            out.y[i] = self.y[i] + s[i] * o.y[i];
+            out.z[i] = self.z[i] + s[i] * o.z[i];
+        }
+        out
+    }
+
+    /// `self·s − 1` per component (`v * s - Vec3::ONE`).
+    #[inline(always)]
+    pub fn scale_minus_one(&self, s: f32) -> Self {
+        let mut out = *self;
+        for i in 0..N {
+            out.x[i] = self.x[i] * s - 1.0;
+            out.y[i] = self.y[i] * s - 1.0;
+            out.z[i] = self.z[i] * s - 1.0;
+        }
+        out
+    }
+
+    /// `Vec3::normalize_or`: `r = 1 / sqrt(v·v)`; `v·r` where `r` is finite and positive, else
+    /// the fallback's lane.
+    #[inline(always)]
+    pub fn normalize_or(&self, fallback: &Self) -> Self {
+        let mut rcp = self.dot(self);
+        for r in &mut rcp {
+            *r = 1.0 / r.sqrt();
+        }
+        let mut out = *fallback;
+        for i in 0..N {
+            // Finite and positive (NaN is neither): the bits from 1 to those of `f32::MAX`. An
+            // integer compare, because LLVM does not vectorise a loop that combines float
+            // compares into a bool.
+            let r = rcp[i];
+            let keep = lane_mask(r.to_bits().wrapping_sub(1) < f32::MAX.to_bits());
+            out.x[i] = select_bits(keep, self.x[i] * r, fallback.x[i]);
+            out.y[i] = select_bits(keep, self.y[i] * r, fallback.y[i]);
+            out.z[i] = select_bits(keep, self.z[i] * r, fallback.z[i]);
+        }
+        out
+    }
+
+    /// `Vec3::normalize_or_zero`.
+    #[inline(always)]
+    pub fn normalize_or_zero(&self) -> Self {
+        self.normalize_or(&Self::splat(Vec3::ZERO))
+    }
+
+    /// `v == Vec3::ZERO` per lane (−0 counts as zero, NaN does not).
+    #[inline(always)]
+    pub fn is_zero(&self) -> [bool; N] {
+        self.zero_mask().map(|m| m != 0)
+    }
+
+    /// [`Vec3xN::is_zero`] as a [`lane_mask`]: every component's bits but the sign are 0.
+    #[inline(always)]
+    pub(crate) fn zero_mask(&self) -> [u32; N] {
+        let mut mask = [0; N];
+        for i in 0..N {
+            let bits = self.x[i].to_bits() | self.y[i].to_bits() | self.z[i].to_bits();
+            mask[i] = lane_mask(bits << 1 == 0);
+        }
+        mask
+    }
+
+    /// The per-lane product `s·v` (`f32 * Vec3`).
+    #[inline(always)]
+    pub fn scaled(&self, s: [f32; N]) -> Self {
+        Vec3xN {
+            x: zip_lanes(s, self.x, |s, c| s * c),
+            y: zip_lanes(s, self.y, |s, c| s * c),
+            z: zip_lanes(s, self.z, |s, c| s * c),
+        }
+    }
+}
+
+impl Vec3x4 {
     /// The components as packed registers.
     #[inline(always)]
     pub(crate) fn packed(&self) -> [f32x4; 3] {
@@ -69,65 +202,6 @@ impl Vec3x4 {
             z: z.to_array(),
         }
     }
-
-    /// `Vec3::dot`: `(x·x' + y·y') + z·z'`.
-    #[inline(always)]
-    pub fn dot(&self, o: &Self) -> [f32; LANES] {
-        dot_packed(self.packed(), o.packed()).to_array()
-    }
-
-    /// `self + s·o` per lane (`Vec3 + f32 * Vec3`).
-    #[inline(always)]
-    pub fn add_scaled(&self, s: [f32; LANES], o: &Self) -> Self {
-        let s = f32x4::new(s);
-        let (a, b) = (self.packed(), o.packed());
-        Self::from_packed(std::array::from_fn(|c| a[c] + s * b[c]))
-    }
-
-    /// `self·s − 1` per component (`v * s - Vec3::ONE`).
-    #[inline(always)]
-    pub fn scale_minus_one(&self, s: f32) -> Self {
-        let s = f32x4::splat(s);
-        Self::from_packed(self.packed().map(|c| c * s - f32x4::ONE))
-    }
-
-    /// `Vec3::normalize_or`: `r = 1 / sqrt(v·v)`; `v·r` where `r` is finite and positive, else
-    /// the fallback's lane.
-    #[inline(always)]
-    pub fn normalize_or(&self, fallback: &Self) -> Self {
-        let v = self.packed();
-        let rcp = f32x4::ONE / dot_packed(v, v).sqrt();
-        let keep = rcp.is_finite() & rcp.simd_gt(f32x4::ZERO);
-        let fallback = fallback.packed();
-        Self::from_packed(std::array::from_fn(|c| {
-            keep.select(v[c] * rcp, fallback[c])
-        }))
-    }
-
-    /// `Vec3::normalize_or_zero`.
-    #[inline(always)]
-    pub fn normalize_or_zero(&self) -> Self {
-        self.normalize_or(&Vec3x4::splat(Vec3::ZERO))
-    }
-
-    /// `v == Vec3::ZERO` per lane (−0 counts as zero, NaN does not).
-    #[inline(always)]
-    pub fn is_zero(&self) -> [bool; LANES] {
-        self.zero_mask().to_array().map(|m| m.to_bits() != 0)
-    }
-
-    /// [`Vec3x4::is_zero`] as a lane mask (all bits set where zero), for `select`.
-    #[inline(always)]
-    pub(crate) fn zero_mask(&self) -> f32x4 {
-        let [x, y, z] = self.packed();
-        x.simd_eq(f32x4::ZERO) & y.simd_eq(f32x4::ZERO) & z.simd_eq(f32x4::ZERO)
-    }
-}
-
-/// `Vec3::dot` of packed components: `(x·x' + y·y') + z·z'`.
-#[inline(always)]
-fn dot_packed([x, y, z]: [f32x4; 3], [x2, y2, z2]: [f32x4; 3]) -> f32x4 {
-    (x * x2 + y * y2) + z * z2
 }
 
 #[cfg(test)]
@@ -137,6 +211,11 @@ pub(crate) mod tests {
 
     /// Random lanes with specials mixed in: zero, −0, NaN, infinite, tiny and huge vectors.
     pub(crate) fn lanes(rng: &mut Lcg, k: usize) -> [Vec3; LANES] {
+        lanes_n(rng, k)
+    }
+
+    /// [`lanes`] of any width.
+    pub(crate) fn lanes_n<const N: usize>(rng: &mut Lcg, k: usize) -> [Vec3; N] {
         let special = [
             Vec3::ZERO,
             Vec3::new(-0.0, 0.0, -0.0),
@@ -161,18 +240,23 @@ pub(crate) mod tests {
 
     #[test]
     fn lane_operations_are_the_scalar_twins_bit_for_bit() {
+        twins_bit_for_bit::<4>();
+        twins_bit_for_bit::<8>();
+    }
+
+    fn twins_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(41);
         for k in 0..5000 {
             let (a, b, c) = (
-                lanes(&mut rng, k),
-                lanes(&mut rng, k + 3),
-                lanes(&mut rng, k + 5),
+                lanes_n::<N>(&mut rng, k),
+                lanes_n::<N>(&mut rng, k + 3),
+                lanes_n::<N>(&mut rng, k + 5),
             );
-            let s: [f32; LANES] = std::array::from_fn(|i| rng.range(-2.0, 2.0) * (i as f32));
+            let s: [f32; N] = std::array::from_fn(|i| rng.range(-2.0, 2.0) * (i as f32));
             let (va, vb, vc) = (
-                Vec3x4::from_lanes(a),
-                Vec3x4::from_lanes(b),
-                Vec3x4::from_lanes(c),
+                Vec3xN::from_lanes(a),
+                Vec3xN::from_lanes(b),
+                Vec3xN::from_lanes(c),
             );
             let dot = va.dot(&vb);
             let sum = va.add_scaled(s, &vb);
@@ -180,7 +264,9 @@ pub(crate) mod tests {
             let normal_or = va.normalize_or(&vc);
             let normal = va.normalize_or_zero();
             let zero = va.is_zero();
-            for i in 0..LANES {
+            let scaled = va.scaled(s);
+            for i in 0..N {
+                assert_eq!(bits(scaled.lane(i)), bits(s[i] * a[i]), "scaled");
                 assert_eq!(bits(va.lane(i)), bits(a[i]));
                 assert_eq!(
                     dot[i].to_bits(),

@@ -1,8 +1,8 @@
 //! The lighting combination of thesis 3.2.3: dampened specular and the final colour, eq. 3.7,
 //! with one user weight per term.
 
-use super::lanes::{LANES, Vec3x4};
-use super::numeric::saturate_x4;
+use super::lanes::Vec3xN;
+use super::numeric::{saturate_select, saturate_x4};
 use glam::Vec3;
 use wide::f32x4;
 
@@ -28,17 +28,20 @@ pub fn dampened_specular(s: f32) -> f32 {
     }
 }
 
-/// [`dampened_specular`] of four lanes, the same bits (the branches as selects; NaN compares
+/// [`dampened_specular`] of `N` lanes, the same bits (the branches as selects; NaN compares
 /// false and gives 0).
 #[inline(always)]
-pub fn dampened_specular_x4(s: [f32; LANES]) -> [f32; LANES] {
-    let s = f32x4::new(s);
-    let ramp = s
-        .simd_gt(f32x4::ZERO)
-        .select(f32x4::splat(0.5) * s, f32x4::ZERO);
-    s.simd_gt(f32x4::splat(DAMPENING_THRESHOLD))
-        .select(f32x4::splat(DAMPENED_SPECULAR_MAX), ramp)
-        .to_array()
+pub fn dampened_specular_lanes<const N: usize>(s: [f32; N]) -> [f32; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        let ramp = if s[i] > 0.0 { 0.5 * s[i] } else { 0.0 };
+        out[i] = if s[i] > DAMPENING_THRESHOLD {
+            DAMPENED_SPECULAR_MAX
+        } else {
+            ramp
+        };
+    }
+    out
 }
 
 /// The user weights of eq. 3.7 (thesis 3.2.3: "we multiply each of these by a user defined
@@ -158,39 +161,70 @@ pub fn final_colour(
     Vec3::new(x, y, z)
 }
 
-/// [`final_colour`] (eq. 3.7) of four fragments (the lanes of a quad): per lane and channel the
-/// same operations in the same order, so the same bits, with each channel of the four lanes
-/// as one packed register instead of the three channels of one fragment.
+/// [`final_colour`] (eq. 3.7) of `N` fragments (the lit lanes of a batch): per lane and
+/// channel the same operations in the same order, so the same bits, with each channel of the
+/// lanes as one packed run instead of the three channels of one fragment.
 #[allow(clippy::too_many_arguments)] // one argument per term of eq. 3.7, in its order
 #[inline(always)]
-pub fn final_colour_x4(
-    strand_colour: &Vec3x4,
+pub fn final_colour_lanes<const N: usize>(
+    strand_colour: &Vec3xN<N>,
     light_colour: Vec3,
     ambient: f32,
-    diffuse: [f32; LANES],
-    specular: [f32; LANES],
-    dampened: [f32; LANES],
-    shadow: [f32; LANES],
+    diffuse: [f32; N],
+    specular: [f32; N],
+    dampened: [f32; N],
+    shadow: [f32; N],
     weights: &ShadingWeights,
     term: AmbientTerm,
-) -> Vec3x4 {
-    let splat = f32x4::splat;
-    let lit = splat(weights.diffuse) * f32x4::new(diffuse)
-        + splat(weights.specular) * f32x4::new(specular);
-    let highlight = splat(weights.dampened) * f32x4::new(dampened);
-    let dark = splat(weights.shadow) * f32x4::new(shadow);
+) -> Vec3xN<N> {
+    let (mut lit, mut highlight, mut dark) = ([0.0; N], [0.0; N], [0.0; N]);
+    for i in 0..N {
+        lit[i] = weights.diffuse * diffuse[i] + weights.specular * specular[i];
+        highlight[i] = weights.dampened * dampened[i];
+        dark[i] = weights.shadow * shadow[i];
+    }
     let level = weights.ambient * ambient;
-    let strand = strand_colour.packed();
-    let light = light_colour.to_array();
-    Vec3x4::from_packed(std::array::from_fn(|c| {
-        let (s, l) = (strand[c], splat(light[c]));
-        // `ambient_term`: the level alone, or the strand times it.
-        let a = match term {
-            AmbientTerm::Constant => splat(level),
-            AmbientTerm::Strand => s * splat(level),
-        };
-        saturate_x4(a + s * l * lit + l * highlight - dark)
-    }))
+    let terms = ChannelTerms {
+        level,
+        term,
+        lit,
+        highlight,
+        dark,
+    };
+    Vec3xN {
+        x: terms.channel(strand_colour.x, light_colour.x),
+        y: terms.channel(strand_colour.y, light_colour.y),
+        z: terms.channel(strand_colour.z, light_colour.z),
+    }
+}
+
+/// What eq. 3.7 adds to every channel of `N` lanes, for [`final_colour_lanes`].
+struct ChannelTerms<const N: usize> {
+    level: f32,
+    term: AmbientTerm,
+    lit: [f32; N],
+    highlight: [f32; N],
+    dark: [f32; N],
+}
+
+impl<const N: usize> ChannelTerms<N> {
+    /// One channel of eq. 3.7 on the lanes, as [`final_colour`] computes it.
+    #[inline(always)]
+    fn channel(&self, strand: [f32; N], light: f32) -> [f32; N] {
+        let mut out = [0.0; N];
+        for i in 0..N {
+            let s = strand[i];
+            // `ambient_term`: the level alone, or the strand times it.
+            let a = match self.term {
+                AmbientTerm::Constant => self.level,
+                AmbientTerm::Strand => s * self.level,
+            };
+            out[i] = saturate_select(
+                a + s * light * self.lit[i] + light * self.highlight[i] - self.dark[i],
+            );
+        }
+        out
+    }
 }
 
 #[cfg(test)]
@@ -323,7 +357,12 @@ mod tests {
     }
 
     #[test]
-    fn four_lanes_are_the_scalar_eq_3_7_bit_for_bit() {
+    fn lanes_are_the_scalar_eq_3_7_bit_for_bit() {
+        lanes_bit_for_bit::<4>();
+        lanes_bit_for_bit::<8>();
+    }
+
+    fn lanes_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(23);
         let specials = [0.0, -0.0, 0.6, 1.0, -1.0, 3e38, f32::NAN, f32::INFINITY];
         let mut pick = |k: usize| {
@@ -334,19 +373,19 @@ mod tests {
             }
         };
         for k in 0..5000usize {
-            let lanes: [f32; 4] = std::array::from_fn(|i| pick(k * 40 + i));
-            let got = dampened_specular_x4(lanes);
-            for i in 0..4 {
+            let lanes: [f32; N] = std::array::from_fn(|i| pick(k * 40 + i));
+            let got = dampened_specular_lanes(lanes);
+            for i in 0..N {
                 assert_eq!(got[i].to_bits(), dampened_specular(lanes[i]).to_bits());
             }
-            let strand: [Vec3; 4] = std::array::from_fn(|i| {
+            let strand: [Vec3; N] = std::array::from_fn(|i| {
                 Vec3::new(
                     pick(k * 40 + 4 + i),
                     pick(k * 40 + 8 + i),
                     pick(k * 40 + 12 + i),
                 )
             });
-            let term: [[f32; 4]; 4] =
+            let term: [[f32; N]; 4] =
                 std::array::from_fn(|t| std::array::from_fn(|i| pick(k * 40 + 16 + 4 * t + i)));
             let light = Vec3::new(pick(k * 40 + 32), pick(k * 40 + 33), pick(k * 40 + 34));
             let ambient = pick(k * 40 + 35);
@@ -358,8 +397,8 @@ mod tests {
                 shadow: [0.08, 1.0, -0.5][k % 3],
             };
             let ambient_term = [AmbientTerm::Strand, AmbientTerm::Constant][k % 2];
-            let got = final_colour_x4(
-                &Vec3x4::from_lanes(strand),
+            let got = final_colour_lanes(
+                &Vec3xN::from_lanes(strand),
                 light,
                 ambient,
                 term[0],
@@ -369,7 +408,7 @@ mod tests {
                 &w,
                 ambient_term,
             );
-            for i in 0..4 {
+            for i in 0..N {
                 let expected = final_colour(
                     strand[i],
                     light,

@@ -97,14 +97,15 @@ pub mod wind;
 pub use burn::{BURN_THRESHOLD, BurnOutcome, BurnSchedule, burn_exponent, burn_rule};
 pub use kajiya_kay::{
     BANKS_EXPONENT, LightingExponents, SpecularLobes, SpecularTangents, StrandLighting,
-    kajiya_kay_diffuse, kajiya_kay_specular, shift_tangent, specular_lobe_mean, specular_lobe_sum,
-    specular_with_tangents, strand_lighting, strand_lighting_x4, three_lobe_specular,
+    StrandLightingLanes, kajiya_kay_diffuse, kajiya_kay_specular, shift_tangent,
+    specular_lobe_mean, specular_lobe_sum, specular_with_tangents, strand_lighting,
+    strand_lighting_lanes, three_lobe_specular,
 };
-pub use lanes::{LANES, Vec3x4};
+pub use lanes::{LANES, Vec3x4, Vec3x8, Vec3xN};
 pub use lighting::{
     AmbientTerm, DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
-    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, dampened_specular_x4,
-    final_colour, final_colour_x4,
+    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, dampened_specular_lanes,
+    final_colour, final_colour_lanes,
 };
 pub use lod::{
     lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,
@@ -118,9 +119,9 @@ pub use motion::{
 };
 pub use projection::{Axis, SINGULAR_RELATIVE_DET, project_to_uv, project_to_uv_dropping};
 pub use shadow::{
-    SHADOW_MIN_COS, SHADOW_OPAQUE_ALPHA, ShadowTexel, shadow_change, shadow_lookup_count,
-    shadow_of_alpha, shadow_of_opaque, shadow_texel, shell_shadow, shell_shadow_lanes,
-    shell_shadow_x4,
+    SHADOW_MIN_COS, SHADOW_OPAQUE_ALPHA, ShadowLanes, ShadowTexel, shadow_change,
+    shadow_lookup_count, shadow_of_alpha, shadow_of_opaque, shadow_texel, shell_shadow,
+    shell_shadow_lanes, shell_shadow_x4,
 };
 pub use spots::{
     apply_spot, apply_spot_x4, apply_spots, ellipsoid_spot_intensity, ellipsoid_spot_intensity_x4,
@@ -130,6 +131,6 @@ pub use spots::{
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{
-    VIBRATION_RATIO, WindParams, bend_tangent, bend_tangent_x4, vertex_pull, wind_displacement,
+    VIBRATION_RATIO, WindParams, bend_tangent, bend_tangent_lanes, vertex_pull, wind_displacement,
     wind_force, wind_uv_offset,
 };

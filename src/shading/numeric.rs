@@ -78,10 +78,10 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
     exp2_of_product_x4(x, &log2_x, f32x4::new(exponent.map(sanitize_exponent))).to_array()
 }
 
-/// The powers of one quad's strand lighting with one tangent, 12 lanes in three batches
-/// instead of five: `(d^banks, c^specular, c^dampened)` lane by lane for the diffuse bases `d`
-/// and the specular bases `c`, the same bits as [`pow01`] of each. The two bases' logarithms
-/// are taken as one batch of 8 lanes and `d^banks, c^specular` as another; `c^dampened` shares
+/// The powers of `N` fragments' strand lighting with one tangent, in three batches of `N`
+/// lanes instead of five: `(d^banks, c^specular, c^dampened)` lane by lane for the diffuse
+/// bases `d` and the specular bases `c`, the same bits as [`pow01`] of each. The logarithms of
+/// both bases are taken in one pass and `d^banks, c^specular` in another; `c^dampened` shares
 /// `c`'s logarithm.
 ///
 /// Written as plain per-lane loops over arrays of the scalar steps (no `wide` type): LLVM turns
@@ -89,43 +89,60 @@ pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
 /// and into two 128-bit halves in the baseline, while `wide::f32x8` is always two halves in a
 /// baseline build. Each lane runs the scalar [`pow01`]'s IEEE operations in its order.
 #[inline(always)]
-pub(crate) fn pow01_x4_diffuse_specular_dampened(
-    diffuse: [f32; 4],
-    specular: [f32; 4],
+pub(crate) fn pow01_diffuse_specular_dampened_lanes<const N: usize>(
+    diffuse: [f32; N],
+    specular: [f32; N],
     exponents: [f32; 3],
-) -> ([f32; 4], [f32; 4], [f32; 4]) {
-    let [banks, spec, damp] = exponents.map(sanitize_exponent);
-    let mut x = [0.0f32; 8];
-    let mut y = [0.0f32; 8];
-    for i in 0..4 {
-        x[i] = saturate_select(diffuse[i]);
-        x[4 + i] = saturate_select(specular[i]);
-        y[i] = banks;
-        y[4 + i] = spec;
+) -> ([f32; N], [f32; N], [f32; N]) {
+    let [banks, spec, damp] = [
+        sanitize_exponent(exponents[0]),
+        sanitize_exponent(exponents[1]),
+        sanitize_exponent(exponents[2]),
+    ];
+    let (mut xd, mut xs) = ([0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        xd[i] = saturate_select(diffuse[i]);
+        xs[i] = saturate_select(specular[i]);
     }
-    let mut lh = [0.0f32; 8];
-    let mut ll = [0.0f32; 8];
-    for i in 0..8 {
+    let (mut dh, mut dl, mut sh, mut sl) = ([0.0f32; N], [0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        (dh[i], dl[i]) = log2_lane(xd[i]);
+        (sh[i], sl[i]) = log2_lane(xs[i]);
+    }
+    let (mut d, mut c, mut dampened) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        d[i] = exp2_of_product_lane(xd[i], dh[i], dl[i], banks);
+        c[i] = exp2_of_product_lane(xs[i], sh[i], sl[i], spec);
+    }
+    for i in 0..N {
+        dampened[i] = exp2_of_product_lane(xs[i], sh[i], sl[i], damp);
+    }
+    (d, c, dampened)
+}
+
+/// [`pow01`] of `N` lanes with one exponent, the same bits, as plain per-lane loops.
+#[inline(always)]
+pub(crate) fn pow01_lanes<const N: usize>(base: [f32; N], exponent: f32) -> [f32; N] {
+    let y = sanitize_exponent(exponent);
+    let mut x = [0.0f32; N];
+    for i in 0..N {
+        x[i] = saturate_select(base[i]);
+    }
+    let (mut lh, mut ll) = ([0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
         (lh[i], ll[i]) = log2_lane(x[i]);
     }
-    let mut first = [0.0f32; 8];
-    for i in 0..8 {
-        first[i] = exp2_of_product_lane(x[i], lh[i], ll[i], y[i]);
+    let mut out = [0.0f32; N];
+    for i in 0..N {
+        out[i] = exp2_of_product_lane(x[i], lh[i], ll[i], y);
     }
-    let mut dampened = [0.0f32; 4];
-    for i in 0..4 {
-        dampened[i] = exp2_of_product_lane(x[4 + i], lh[4 + i], ll[4 + i], damp);
-    }
-    let (mut d, mut c) = ([0.0f32; 4], [0.0f32; 4]);
-    d.copy_from_slice(&first[..4]);
-    c.copy_from_slice(&first[4..]);
-    (d, c, dampened)
+    out
 }
 
 /// [`saturate`] as compares and selects, the same bits (`−0` and NaN give `+0`), so that a
 /// loop of it vectorises.
 #[inline(always)]
-fn saturate_select(x: f32) -> f32 {
+pub(crate) fn saturate_select(x: f32) -> f32 {
     let at_most_one = if x < 1.0 { x } else { 1.0 };
     if x > 0.0 { at_most_one } else { 0.0 }
 }
@@ -511,9 +528,24 @@ mod tests {
         }
     }
 
-    /// Each lane of [`pow01_x4_diffuse_specular_dampened`] against [`pow01`], bit for bit.
+    /// Each lane of [`pow01_diffuse_specular_dampened_lanes`] and [`pow01_lanes`] against
+    /// [`pow01`], bit for bit, at 4 and 8 lanes.
     fn assert_powers_are_pow01(diffuse: [f32; 4], specular: [f32; 4], exponents: [f32; 3]) {
-        let (d, c, damp) = pow01_x4_diffuse_specular_dampened(diffuse, specular, exponents);
+        let (d, c, damp) = pow01_diffuse_specular_dampened_lanes(diffuse, specular, exponents);
+        let wide: [f32; 8] = std::array::from_fn(|i| [diffuse, specular][i / 4][i % 4]);
+        let (d8, c8, damp8) = pow01_diffuse_specular_dampened_lanes(wide, wide, exponents);
+        let one = pow01_lanes(wide, exponents[0]);
+        for i in 0..8 {
+            let want = pow01(wide[i], exponents[0]);
+            assert_eq!(one[i].to_bits(), want.to_bits(), "pow01_lanes");
+            for (got, exponent) in [
+                (d8[i], exponents[0]),
+                (c8[i], exponents[1]),
+                (damp8[i], exponents[2]),
+            ] {
+                assert_eq!(got.to_bits(), pow01(wide[i], exponent).to_bits(), "8 lanes");
+            }
+        }
         let [banks, spec, dampened] = exponents;
         for i in 0..4 {
             for (got, base, exponent) in [

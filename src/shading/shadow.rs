@@ -2,7 +2,7 @@
 //! inside the current shell texture, and count how opaque the texels met are. The number of
 //! steps shrinks from root to tip (`m = (N − i)/n`, the "height/n" of table 4.4).
 
-use super::numeric::{finite_or_zero, saturate, saturate_x4};
+use super::numeric::{finite_or_zero, saturate, saturate_select, saturate_x4};
 use glam::{Vec2, Vec3};
 use wide::f32x4;
 
@@ -183,47 +183,101 @@ pub fn shell_shadow_x4(
     shadow
 }
 
-/// [`shell_shadow`] of the four fragments of a quad (one layer, so one lookup count `m`),
-/// lookup `k` of every lane in one batch: `sample_alpha_x4` gets the u and v of lookup `k` of
-/// the four lanes and returns their alphas. Lane by lane the same points and the same sum in
-/// the same order (`0 + s₁ + s₂ + … + s_m`), so the same bits as [`shell_shadow`] on each lane.
+/// [`shell_shadow`] of `N` fragments of one layer (so one lookup count `m`), lookup `k` of
+/// every lane in one batch: `sample_alpha` gets the u and v of lookup `k` of the lanes and
+/// returns their alphas. Lane by lane the same points and the same sum in the same order
+/// (`0 + s₁ + s₂ + … + s_m`), so the same bits as [`shell_shadow`] on each lane.
 ///
-/// Why by lookup rather than by fragment ([`shell_shadow_x4`]): every lane of a quad has the
-/// same `m`, so `m` batches serve the whole quad with no padding, where four lookups a batch
-/// per fragment pad `m` to a multiple of four (8 batches for `m = 6` on a full quad, 4 for
-/// `m = 1`, against 6 and 1 here). The fraction `k/m` is computed once per batch for all lanes.
-/// Lanes the caller does not need still run (give them any finite point; their sums are
-/// dropped).
+/// Why by lookup rather than by fragment ([`shell_shadow_x4`]): every lane of a layer has the
+/// same `m`, so `m` batches serve all lanes with no padding, where four lookups a batch per
+/// fragment pad `m` to a multiple of four (8 batches for `m = 6`, 4 for `m = 1`, against 6
+/// and 1 here). The fraction `k/m` is computed once per batch for all lanes. Lanes the caller
+/// does not need still run (give them any finite point; their sums are dropped).
 #[inline(always)]
-pub fn shell_shadow_lanes(
-    mut sample_alpha_x4: impl FnMut([f32; 4], [f32; 4]) -> [f32; 4],
-    uv: [Vec2; 4],
-    shadow_lookup: [Vec2; 4],
+pub fn shell_shadow_lanes<const N: usize>(
+    mut sample_alpha: impl FnMut([f32; N], [f32; N]) -> [f32; N],
+    uv: [Vec2; N],
+    shadow_lookup: [Vec2; N],
     lookups: u32,
     texel: ShadowTexel,
-) -> [f32; 4] {
-    // `finite_or_zero` of each component, as `LookupPath::new`.
-    let finite = |x: [f32; 4]| {
-        let x = f32x4::new(x);
-        x.is_finite().select(x, f32x4::ZERO)
-    };
-    let (u0, v0) = (finite(uv.map(|p| p.x)), finite(uv.map(|p| p.y)));
-    let (du, dv) = (
-        finite(shadow_lookup.map(|p| p.x)),
-        finite(shadow_lookup.map(|p| p.y)),
-    );
-    let m = lookups as f32;
-    let mut shadow = f32x4::ZERO;
+) -> [f32; N] {
+    let mut sums = ShadowLanes::new(uv, shadow_lookup, lookups, texel);
     for k in 1..=lookups {
-        // `LookupPath::point`: `uv + step·(k/m)`, per component.
-        let fraction = f32x4::splat(k as f32 / m);
-        let (u, v) = (
-            (u0 + du * fraction).to_array(),
-            (v0 + dv * fraction).to_array(),
-        );
-        shadow += shadow_texel_x4(f32x4::new(sample_alpha_x4(u, v)), texel);
+        let (u, v) = sums.point(k);
+        sums.add(sample_alpha(u, v));
     }
-    shadow.to_array()
+    sums.shadow
+}
+
+/// [`shell_shadow_lanes`] step by step, for a caller whose sampler is too large to pass as a
+/// closure (LLVM keeps a large closure out of line, outside the level's copy of the hot path):
+/// for `k` in `1..=lookups`, sample the alphas at [`ShadowLanes::point`] and
+/// [`ShadowLanes::add`] them; the sums are then in `shadow`.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowLanes<const N: usize> {
+    u0: [f32; N],
+    v0: [f32; N],
+    du: [f32; N],
+    dv: [f32; N],
+    m: f32,
+    texel: ShadowTexel,
+    /// The sums so far, `0 + s₁ + …`.
+    pub shadow: [f32; N],
+}
+
+impl<const N: usize> ShadowLanes<N> {
+    /// The lanes' lookup paths, their sums at +0.
+    #[inline(always)]
+    pub fn new(uv: [Vec2; N], shadow_lookup: [Vec2; N], lookups: u32, texel: ShadowTexel) -> Self {
+        let mut sums = ShadowLanes {
+            u0: [0.0; N],
+            v0: [0.0; N],
+            du: [0.0; N],
+            dv: [0.0; N],
+            m: lookups as f32,
+            texel,
+            shadow: [0.0; N],
+        };
+        // `finite_or_zero` of each component, as `LookupPath::new`.
+        for i in 0..N {
+            sums.u0[i] = finite_or_zero(uv[i].x);
+            sums.v0[i] = finite_or_zero(uv[i].y);
+            sums.du[i] = finite_or_zero(shadow_lookup[i].x);
+            sums.dv[i] = finite_or_zero(shadow_lookup[i].y);
+        }
+        sums
+    }
+
+    /// The u and v of lookup `k` of every lane: `LookupPath::point`, `uv + step·(k/m)`.
+    #[inline(always)]
+    pub fn point(&self, k: u32) -> ([f32; N], [f32; N]) {
+        let fraction = k as f32 / self.m;
+        let (mut u, mut v) = ([0.0f32; N], [0.0f32; N]);
+        for i in 0..N {
+            u[i] = self.u0[i] + self.du[i] * fraction;
+            v[i] = self.v0[i] + self.dv[i] * fraction;
+        }
+        (u, v)
+    }
+
+    /// Adds what [`shadow_texel`] makes of the alphas of one lookup of every lane.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // an indexed loop over two arrays vectorises
+    pub fn add(&mut self, alphas: [f32; N]) {
+        for i in 0..N {
+            self.shadow[i] += match self.texel {
+                // A NaN lane compares false: 0, as the scalar form.
+                ShadowTexel::Opaque => {
+                    if alphas[i] >= SHADOW_OPAQUE_ALPHA {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                }
+                ShadowTexel::Alpha => saturate_select(alphas[i]),
+            };
+        }
+    }
 }
 
 /// Light directions closer to the surface than this cosine are treated as this cosine by
@@ -364,7 +418,12 @@ mod tests {
     }
 
     #[test]
-    fn quad_lanes_at_once_are_the_scalar_sums_bit_for_bit() {
+    fn lanes_at_once_are_the_scalar_sums_bit_for_bit() {
+        lanes_bit_for_bit::<4>();
+        lanes_bit_for_bit::<8>();
+    }
+
+    fn lanes_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(6);
         let alpha = |p: Vec2| {
             let a = (p.x * 12.9898 + p.y * 78.233).sin() * 1.7;
@@ -379,8 +438,8 @@ mod tests {
                 }
                 p
             };
-            let uv: [Vec2; 4] = std::array::from_fn(|_| point(3.0));
-            let offset: [Vec2; 4] = std::array::from_fn(|_| point(0.5));
+            let uv: [Vec2; N] = std::array::from_fn(|_| point(3.0));
+            let offset: [Vec2; N] = std::array::from_fn(|_| point(0.5));
             let lookups = k % 14;
             let texel = [ShadowTexel::Alpha, ShadowTexel::Opaque][k as usize % 2];
             let mut batches = 0;
@@ -396,7 +455,7 @@ mod tests {
             );
             // One batch per lookup, none padded.
             assert_eq!(batches, lookups);
-            for i in 0..4 {
+            for i in 0..N {
                 assert_eq!(
                     lanes[i].to_bits(),
                     shell_shadow(alpha, uv[i], offset[i], lookups, texel).to_bits(),

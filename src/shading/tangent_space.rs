@@ -2,10 +2,9 @@
 //! they meet the strand tangents stored in the shell textures in the same space; and the angle
 //! helpers the Kajiya–Kay terms are built from.
 
-use super::lanes::{LANES, Vec3x4};
+use super::lanes::{Vec3xN, select_bits};
 use crate::mesh::frame::TangentFrame;
 use glam::Vec3;
-use wide::f32x4;
 
 /// Tangent-space coordinates `(v·T, v·B, v·N)` of a world vector (thesis 3.2.1: "we transform
 /// the eye and the light vector by multiplying them with the T, B, N matrix").
@@ -32,22 +31,27 @@ pub(crate) fn cos_sin_unit(a: Vec3, b: Vec3) -> (f32, f32) {
     (c, (1.0 - c * c).max(0.0).sqrt())
 }
 
-/// [`cos_sin_unit`] on four lanes, lane by lane the same bits.
+/// [`cos_sin_unit`] on `N` lanes, lane by lane the same bits (a plain loop that vectorises).
 #[inline(always)]
-pub(crate) fn cos_sin_unit_x4(a: &Vec3x4, b: &Vec3x4) -> ([f32; LANES], [f32; LANES]) {
-    let dot = f32x4::new(a.dot(b));
-    // `f32::clamp`: NaN stays NaN.
-    let c = dot
-        .simd_lt(f32x4::splat(-1.0))
-        .select(f32x4::splat(-1.0), dot);
-    let c = c.simd_gt(f32x4::ONE).select(f32x4::ONE, c);
-    // `f32::max(x, 0)` is 0 for NaN `x`, and so is `wide`'s `max` with a non-NaN right side.
-    let s = (f32x4::ONE - c * c).max(f32x4::ZERO).sqrt();
-    let zero = a.zero_mask() | b.zero_mask();
-    (
-        zero.select(f32x4::ZERO, c).to_array(),
-        zero.select(f32x4::ZERO, s).to_array(),
-    )
+pub(crate) fn cos_sin_unit_lanes<const N: usize>(
+    a: &Vec3xN<N>,
+    b: &Vec3xN<N>,
+) -> ([f32; N], [f32; N]) {
+    let dot = a.dot(b);
+    let (a_zero, b_zero) = (a.zero_mask(), b.zero_mask());
+    let (mut cos, mut sin) = ([0.0; N], [0.0; N]);
+    for i in 0..N {
+        // `f32::clamp`: NaN stays NaN.
+        let c = if dot[i] < -1.0 { -1.0 } else { dot[i] };
+        let c = if c > 1.0 { 1.0 } else { c };
+        // `f32::max(x, 0)` is 0 for NaN `x`.
+        let d = 1.0 - c * c;
+        let s = (if d > 0.0 { d } else { 0.0 }).sqrt();
+        let zero = a_zero[i] | b_zero[i];
+        cos[i] = select_bits(zero, 0.0, c);
+        sin[i] = select_bits(zero, 0.0, s);
+    }
+    (cos, sin)
 }
 
 /// Sine of the angle between `a` and `b`, in `[0, 1]`: both are normalised inside, then
@@ -142,16 +146,20 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn cos_sin_unit_x4_is_four_single_calls_bit_for_bit() {
+    fn cos_sin_unit_lanes_are_single_calls_bit_for_bit() {
+        lanes_bit_for_bit::<4>();
+        lanes_bit_for_bit::<8>();
+    }
+
+    fn lanes_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(44);
         for k in 0..3000 {
-            let a = crate::shading::lanes::tests::lanes(&mut rng, k);
-            let b = crate::shading::lanes::tests::lanes(&mut rng, k + 2);
-            let unit =
-                |v: [Vec3; LANES]| v.map(|v| if k % 2 == 0 { v.normalize_or_zero() } else { v });
+            let a = crate::shading::lanes::tests::lanes_n::<N>(&mut rng, k);
+            let b = crate::shading::lanes::tests::lanes_n::<N>(&mut rng, k + 2);
+            let unit = |v: [Vec3; N]| v.map(|v| if k % 2 == 0 { v.normalize_or_zero() } else { v });
             let (a, b) = (unit(a), unit(b));
-            let (cos, sin) = cos_sin_unit_x4(&Vec3x4::from_lanes(a), &Vec3x4::from_lanes(b));
-            for i in 0..LANES {
+            let (cos, sin) = cos_sin_unit_lanes(&Vec3xN::from_lanes(a), &Vec3xN::from_lanes(b));
+            for i in 0..N {
                 let (c, s) = cos_sin_unit(a[i], b[i]);
                 assert_eq!(
                     [cos[i].to_bits(), sin[i].to_bits()],

@@ -3,7 +3,7 @@
 //! the wind's surface-tangent part, scaled by the layer, pulled back along −normal so the strand
 //! keeps its length); the fragment-stage reverse lookup offset and the bent tangent.
 
-use super::lanes::{LANES, Vec3x4};
+use super::lanes::Vec3xN;
 use super::numeric::{finite_or_zero, saturate};
 use super::projection::{Axis, project_to_uv_dropping};
 use core::f32::consts::TAU;
@@ -146,11 +146,15 @@ pub fn bend_tangent(tangent: Vec3, wind_tangent_space: Vec3, fraction: f32) -> V
         .normalize_or(tangent.normalize_or_zero())
 }
 
-/// [`bend_tangent`] on four lanes with one fraction, lane by lane the same bits.
+/// [`bend_tangent`] on `N` lanes with one fraction, lane by lane the same bits.
 #[inline(always)]
-pub fn bend_tangent_x4(tangent: &Vec3x4, wind_tangent_space: &Vec3x4, fraction: f32) -> Vec3x4 {
+pub fn bend_tangent_lanes<const N: usize>(
+    tangent: &Vec3xN<N>,
+    wind_tangent_space: &Vec3xN<N>,
+    fraction: f32,
+) -> Vec3xN<N> {
     tangent
-        .add_scaled([finite_or_zero(fraction); LANES], wind_tangent_space)
+        .add_scaled([finite_or_zero(fraction); N], wind_tangent_space)
         .normalize_or(&tangent.normalize_or_zero())
 }
 
@@ -343,14 +347,19 @@ mod tests {
     }
 
     #[test]
-    fn bend_tangent_x4_is_four_single_bends_bit_for_bit() {
+    fn bend_tangent_lanes_are_single_bends_bit_for_bit() {
+        bends_bit_for_bit::<4>();
+        bends_bit_for_bit::<8>();
+    }
+
+    fn bends_bit_for_bit<const N: usize>() {
         let mut rng = Lcg::new(43);
         for k in 0..3000 {
-            let t = crate::shading::lanes::tests::lanes(&mut rng, k);
-            let w = crate::shading::lanes::tests::lanes(&mut rng, k + 4);
+            let t = crate::shading::lanes::tests::lanes_n::<N>(&mut rng, k);
+            let w = crate::shading::lanes::tests::lanes_n::<N>(&mut rng, k + 4);
             let fraction = [rng.range(0.0, 1.0), 0.0, f32::NAN, -3.0][k % 4];
-            let bent = bend_tangent_x4(&Vec3x4::from_lanes(t), &Vec3x4::from_lanes(w), fraction);
-            for i in 0..LANES {
+            let bent = bend_tangent_lanes(&Vec3xN::from_lanes(t), &Vec3xN::from_lanes(w), fraction);
+            for i in 0..N {
                 assert_eq!(
                     bent.lane(i).to_array().map(f32::to_bits),
                     bend_tangent(t[i], w[i], fraction)
