@@ -14,9 +14,11 @@
 //!
 //! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
-//! steps 1–4 lane by lane, step 6 on the quad's lanes together (lookup `k` of every lane in one
-//! batch, [`shading::shell_shadow_lanes`]), then steps 5 and 7 on the quad's lit lanes together
-//! ([`crate::shading::lanes`]). The golden tests render every scene with both.
+//! steps 1–4 lane by lane (the spots on the quad's four lanes together); then each lit lane
+//! goes into a [`LitBatch`], which takes steps 5–7 for [`LIT_LANES`] lit lanes of the
+//! triangle's quads at once ([`shading::ShadowLanes`] for step 6, lookup `k` of every lane in
+//! one batch; [`crate::shading::lanes`] for the rest). The golden tests render every scene
+//! with both.
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::{MipLevel, TrilinearPair, level_of_detail};
