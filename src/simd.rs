@@ -10,7 +10,9 @@
 //!
 //! No AVX-512 copy: one was built (x86-64-v3 plus AVX-512 F, BW, DQ, VL, CD) and gave the same
 //! bytes, but took 24 % *more* CPU time than the baseline on thesis-4-2 (README, "Where the time
-//! goes"), so it was removed.
+//! goes"), so it was removed. Measured again with the fragment stage's 8-lane batches
+//! (docs/performance.md, "Lit lanes in batches of 8"): the same time as AVX2 with 8 lanes a
+//! batch, 7–10 % more with 16 lanes in 512-bit registers.
 //!
 //! Invariant: **every level gives the same bytes.** Every copy runs the same IEEE operations in
 //! the same order: Rust never contracts `a·b + c` into a fused multiply-add (LLVM fuses only on
