@@ -496,7 +496,7 @@ impl ShadeParams {
     }
 
     /// [`ShadeParams::burn_outcome`] with the normal already normalised.
-    #[inline]
+    #[inline(always)]
     pub fn burn_outcome_at_unit_normal(
         &self,
         unit_normal: Vec3,
@@ -767,7 +767,7 @@ impl<'a> LitBatch<'a> {
         sampler: Sampler,
         layer: &LayerParams,
         p: &ShadeParams,
-        mut write: impl FnMut(PixelSlot, Vec4),
+        write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
         if self.len == 0 {
             return;
@@ -898,8 +898,8 @@ impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     }
 
     #[inline(always)]
-    fn finish_triangle(&self, batch: &mut LitBatch<'a>, write: impl FnMut(PixelSlot, Vec4)) {
-        batch.light(self.textures.sampler, &self.layer, self.params, write);
+    fn finish_triangle(&self, batch: &mut LitBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
+        batch.light(self.textures.sampler, &self.layer, self.params, &mut write);
     }
 }
 
