@@ -3,9 +3,7 @@
 //! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
 use super::lanes::Vec3xN;
-use super::numeric::{
-    finite_or_zero, pow01, pow01_diffuse_specular_dampened_lanes, pow01_lanes, pow01_x4,
-};
+use super::numeric::{finite_or_zero, pow01, pow01_diffuse_specular_dampened_lanes, pow01_lanes};
 use super::tangent_space::{cos_sin_unit, cos_sin_unit_lanes};
 use glam::Vec3;
 
@@ -96,7 +94,7 @@ pub fn strand_lighting(
     let bases = LightingBases::new(tangent, normal, light, eye, tangents, shift);
     match tangents {
         SpecularTangents::One => {
-            let [diffuse, specular, specular_to_dampen, _] = pow01_x4(
+            let [diffuse, specular, specular_to_dampen, _] = pow01_lanes(
                 [bases.diffuse, bases.centre, bases.centre, 0.0],
                 [exponents.banks, exponents.specular, exponents.dampened, 1.0],
             );
@@ -107,7 +105,7 @@ pub fn strand_lighting(
             }
         }
         SpecularTangents::Three(lobes) => {
-            let [diffuse, centre_specular, specular_to_dampen, up_specular] = pow01_x4(
+            let [diffuse, centre_specular, specular_to_dampen, up_specular] = pow01_lanes(
                 [bases.diffuse, bases.centre, bases.centre, bases.up],
                 [
                     exponents.banks,
@@ -213,7 +211,10 @@ fn shifted_specular_lanes<const N: usize>(
         .add_scaled([finite_or_zero(shift); N], n)
         .normalize_or_zero();
     let (cos_tl, sin_tl) = cos_sin_unit_lanes(&shifted, l);
-    pow01_lanes(specular_base_lanes(&shifted, e, cos_tl, sin_tl), exponent)
+    pow01_lanes(
+        specular_base_lanes(&shifted, e, cos_tl, sin_tl),
+        [exponent; N],
+    )
 }
 
 /// The bases of the powers of one fragment's strand lighting, from the inputs normalised once:

@@ -2,8 +2,7 @@
 //! finite value for every input, NaN and infinities included, so no shading term can leak a NaN
 //! into the framebuffer.
 
-use bytemuck::cast;
-use wide::{f32x4, i32x4};
+use wide::f32x4;
 
 /// Clamps to `[0, 1]`; NaN becomes 0.
 #[inline]
@@ -34,12 +33,12 @@ pub(crate) fn sanitize_exponent(p: f32) -> f32 {
 }
 
 /// `saturate(base)` raised to the sanitised exponent: pelage's own power of saturated bases,
-/// `2^(y·log2 x)` (see [`pow01_x4`] for the algorithm and its accuracy); always in `[0, 1]`.
+/// `2^(y·log2 x)` (see [`pow01_lanes`] for the algorithm and its accuracy); always in `[0, 1]`.
 ///
 /// Edge cases: `y = 0` gives 1 (so `0^0 = 1`), `x = 0` gives 0 for `y > 0`, `x = 1` gives 1,
 /// `y = +inf` gives 0 below 1; `y·log2 x < −151` gives 0, subnormal bases and results are
 /// computed (not flushed). The scalar twin of the lanes: the same IEEE operations in the same
-/// order, so the same bits as each lane of [`pow01_x4`] (and as `pow01` in `src/gpu/fur.wgsl`
+/// order, so the same bits as each lane of [`pow01_lanes`] (and as `pow01` in `src/gpu/fur.wgsl`
 /// where the GPU does not contract to fused multiply-adds).
 #[inline(always)]
 pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
@@ -48,7 +47,7 @@ pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
     exp2_of_product_lane(x, lh, ll, sanitize_exponent(exponent))
 }
 
-/// Four [`pow01`]s at once, each lane bit-identical to `pow01(base[i], exponent[i])`.
+/// `N` [`pow01`]s at once, each lane bit-identical to `pow01(base[i], exponent[i])`.
 ///
 /// pelage's power of a saturated base `x` in `[0, 1]` by a sanitised exponent `y ≥ 0`, a
 /// convention of its own (not a copy of a C library): `2^(y·log2 x)` with its own polynomials,
@@ -71,11 +70,25 @@ pub(crate) fn pow01(base: f32, exponent: f32) -> f32 {
 /// smaller normal results (measured 6.56; the f32 rounding of the `log2 m` tail, relative
 /// error about 3e-9, is multiplied by `|y·log2 x|`), subnormal results within 4 steps of
 /// `2^-149` (3.33).
+///
+/// Written as plain per-lane loops of the scalar steps ([`log2_lane`], [`exp2_of_product_lane`]),
+/// which LLVM vectorises as wide as the level's copy of the hot path allows.
 #[inline(always)]
-pub(crate) fn pow01_x4(base: [f32; 4], exponent: [f32; 4]) -> [f32; 4] {
-    let x = saturate_x4(f32x4::new(base));
-    let log2_x = Log2x4::new(x);
-    exp2_of_product_x4(x, &log2_x, f32x4::new(exponent.map(sanitize_exponent))).to_array()
+pub(crate) fn pow01_lanes<const N: usize>(base: [f32; N], exponent: [f32; N]) -> [f32; N] {
+    let (mut x, mut y) = ([0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        x[i] = saturate_select(base[i]);
+        y[i] = sanitize_exponent(exponent[i]);
+    }
+    let (mut lh, mut ll) = ([0.0f32; N], [0.0f32; N]);
+    for i in 0..N {
+        (lh[i], ll[i]) = log2_lane(x[i]);
+    }
+    let mut out = [0.0f32; N];
+    for i in 0..N {
+        out[i] = exp2_of_product_lane(x[i], lh[i], ll[i], y[i]);
+    }
+    out
 }
 
 /// The powers of `N` fragments' strand lighting with one tangent, in three batches of `N`
@@ -120,25 +133,6 @@ pub(crate) fn pow01_diffuse_specular_dampened_lanes<const N: usize>(
     (d, c, dampened)
 }
 
-/// [`pow01`] of `N` lanes with one exponent, the same bits, as plain per-lane loops.
-#[inline(always)]
-pub(crate) fn pow01_lanes<const N: usize>(base: [f32; N], exponent: f32) -> [f32; N] {
-    let y = sanitize_exponent(exponent);
-    let mut x = [0.0f32; N];
-    for i in 0..N {
-        x[i] = saturate_select(base[i]);
-    }
-    let (mut lh, mut ll) = ([0.0f32; N], [0.0f32; N]);
-    for i in 0..N {
-        (lh[i], ll[i]) = log2_lane(x[i]);
-    }
-    let mut out = [0.0f32; N];
-    for i in 0..N {
-        out[i] = exp2_of_product_lane(x[i], lh[i], ll[i], y);
-    }
-    out
-}
-
 /// [`saturate`] as compares and selects, the same bits (`−0` and NaN give `+0`), so that a
 /// loop of it vectorises.
 #[inline(always)]
@@ -147,8 +141,10 @@ pub(crate) fn saturate_select(x: f32) -> f32 {
     if x > 0.0 { at_most_one } else { 0.0 }
 }
 
-/// `log2 x` of [`pow01`] in two parts `lh + ll` (steps 1 to 3 of [`pow01_x4`]), the scalar
-/// twin of [`Log2x4::new`]; its branch is a select, so that loops of it over lanes vectorise.
+/// `log2 x` of [`pow01`] in two parts `lh + ll` (steps 1 to 3 of [`pow01_lanes`]), the half
+/// shared by powers of one base (for `x = 0` a meaningless value that
+/// [`exp2_of_product_lane`] replaces); its branch is a select, so that loops of it over lanes
+/// vectorise.
 #[inline(always)]
 fn log2_lane(x: f32) -> (f32, f32) {
     let subnormal = x < f32::MIN_POSITIVE;
@@ -179,9 +175,9 @@ fn log2_lane(x: f32) -> (f32, f32) {
     (lh, ll)
 }
 
-/// The second half of [`pow01`] (step 4 of [`pow01_x4`], from `x`'s logarithm `lh + ll` and the
-/// sanitised `y`), the scalar twin of [`exp2_of_product_x4`]; its branches are selects, so
-/// that loops of it over lanes vectorise.
+/// The second half of [`pow01`] (steps 3 and 4 of [`pow01_lanes`], from `x`'s logarithm
+/// `lh + ll` and the sanitised `y`) with the edge cases: `y = 0` → 1, `x = 0` → 0, `x = 1` → 1,
+/// underflow → 0. Its branches are selects, so that loops of it over lanes vectorise.
 #[inline(always)]
 fn exp2_of_product_lane(x: f32, lh: f32, ll: f32, y: f32) -> f32 {
     let mask = |v: f32| f32::from_bits(v.to_bits() & HIGH_12_BITS);
@@ -247,82 +243,6 @@ const EXP2_P: [f32; 6] = [
     0.001_339_890_1,
     0.000_153_533_42,
 ];
-
-/// `log2 x` of four saturated bases in two parts `lh + ll` (step 1 to 3 of [`pow01_x4`]), the
-/// half shared by powers of one base. Lanes with `x = 0` carry a meaningless value that
-/// [`exp2_of_product_x4`] replaces.
-#[derive(Clone, Copy)]
-struct Log2x4 {
-    lh: f32x4,
-    ll: f32x4,
-}
-
-impl Log2x4 {
-    #[inline(always)]
-    fn new(x: f32x4) -> Self {
-        let mask = |v: f32x4| v & f32x4::splat(f32::from_bits(HIGH_12_BITS));
-        let subnormal = x.simd_lt(f32x4::splat(f32::MIN_POSITIVE));
-        let xs = subnormal.select(x * f32x4::splat(TWO_POW_23), x);
-        let bias = subnormal.select(f32x4::splat(-23.0), f32x4::ZERO);
-        let bits: i32x4 = cast(xs);
-        let k: i32x4 = (bits - i32x4::splat(SQRT_HALF_BITS)) >> 23_u32;
-        let m: f32x4 = cast(bits - (k << 23_u32));
-        let e = k.round_float() + bias;
-        let u = m - f32x4::ONE;
-        let rv = f32x4::ONE / (m + f32x4::ONE);
-        let s = u * rv;
-        let sh = mask(s);
-        let mh = mask(m);
-        let ml = m - mh;
-        let sl = (((u - sh) - sh * mh) - sh * ml) * rv;
-        let z = s * s;
-        let q =
-            f32x4::splat(LOG2_Q[0]) + z * (f32x4::splat(LOG2_Q[1]) + z * f32x4::splat(LOG2_Q[2]));
-        let tail = (s * z) * q;
-        let rh = f32x4::splat(LOG2_C_HIGH) * sh;
-        let rl = (f32x4::splat(LOG2_C_LOW) * s + f32x4::splat(LOG2_C_HIGH) * sl) + tail;
-        let r = rh + rl;
-        let r_low = rl - (r - rh);
-        let lh = e + r;
-        let ll = (r - (lh - e)) + r_low;
-        Log2x4 { lh, ll }
-    }
-}
-
-/// `x^y = 2^(y·log2 x)` on four lanes (steps 3 and 4 of [`pow01_x4`]) with the edge cases:
-/// `y = 0` → 1, `x = 0` → 0, `x = 1` → 1, underflow → 0.
-#[inline(always)]
-fn exp2_of_product_x4(x: f32x4, log2_x: &Log2x4, y: f32x4) -> f32x4 {
-    let mask = |v: f32x4| v & f32x4::splat(f32::from_bits(HIGH_12_BITS));
-    let Log2x4 { lh, ll } = *log2_x;
-    let yh = mask(y);
-    let yl = y - yh;
-    let lhh = mask(lh);
-    let lhl = lh - lhh;
-    let th = yh * lhh;
-    let tl = (yh * lhl + yl * lh) + y * ll;
-    let t = th + tl;
-    let shifted = t.max(f32x4::splat(EXP2_LOWEST)) + f32x4::splat(ROUND_MAGIC);
-    let n = shifted - f32x4::splat(ROUND_MAGIC);
-    let whole = cast::<f32x4, i32x4>(shifted) - i32x4::splat(ROUND_MAGIC.to_bits() as i32);
-    let f = (th - n) + tl;
-    let mut p = f32x4::splat(EXP2_P[5]);
-    for &c in EXP2_P[..5].iter().rev() {
-        p = f32x4::splat(c) + f * p;
-    }
-    let fraction = f32x4::ONE + f * p;
-    let small = whole.simd_lt(i32x4::splat(-125));
-    let whole = small.select(whole + i32x4::splat(64), whole);
-    let scale = cast::<i32x4, f32x4>(small).select(f32x4::splat(TWO_POW_MINUS_64), f32x4::ONE);
-    let scaled: f32x4 = cast(cast::<f32x4, i32x4>(fraction) + (whole << 23_u32));
-    let out = scaled * scale;
-    let out = t
-        .simd_ge(f32x4::splat(UNDERFLOW_BELOW))
-        .select(out, f32x4::ZERO);
-    let out = x.simd_eq(f32x4::ZERO).select(f32x4::ZERO, out);
-    let out = x.simd_eq(f32x4::ONE).select(f32x4::ONE, out);
-    y.simd_eq(f32x4::ZERO).select(f32x4::ONE, out)
-}
 
 /// Hermite smoothstep `t²(3 − 2t)` of `saturate(t)`.
 #[inline]
@@ -496,13 +416,13 @@ mod tests {
     ];
 
     #[test]
-    fn pow01_x4_is_bit_identical_to_pow01() {
+    fn pow01_lanes_are_bit_identical_to_pow01() {
         let bases = pow_bases();
         for (e_index, chunk) in bases.chunks_exact(4).enumerate() {
             let base = [chunk[0], chunk[1], chunk[2], chunk[3]];
             let exponent: [f32; 4] =
                 std::array::from_fn(|i| POW_EXPONENTS[(e_index + i * 5) % POW_EXPONENTS.len()]);
-            let got = pow01_x4(base, exponent);
+            let got = pow01_lanes(base, exponent);
             for i in 0..4 {
                 let want = pow01(base[i], exponent[i]);
                 assert!((0.0..=1.0).contains(&want), "{}^{}", base[i], exponent[i]);
@@ -534,7 +454,7 @@ mod tests {
         let (d, c, damp) = pow01_diffuse_specular_dampened_lanes(diffuse, specular, exponents);
         let wide: [f32; 8] = std::array::from_fn(|i| [diffuse, specular][i / 4][i % 4]);
         let (d8, c8, damp8) = pow01_diffuse_specular_dampened_lanes(wide, wide, exponents);
-        let one = pow01_lanes(wide, exponents[0]);
+        let one = pow01_lanes(wide, [exponents[0]; 8]);
         for i in 0..8 {
             let want = pow01(wide[i], exponents[0]);
             assert_eq!(one[i].to_bits(), want.to_bits(), "pow01_lanes");
@@ -566,7 +486,7 @@ mod tests {
     /// Random bases over every bit pattern of [0, 1] and random exponents from 2^-12 to 2^14:
     /// results from 1 down to the subnormals and to 0.
     #[test]
-    fn pow01_x4_matches_pow01_on_random_bases_and_exponents() {
+    fn pow01_lanes_match_pow01_on_random_bases_and_exponents() {
         let mut rng = crate::shading::test_support::Lcg::new(97);
         for _ in 0..100_000 {
             let base: [f32; 4] =
@@ -575,7 +495,7 @@ mod tests {
             let specular: [f32; 4] =
                 std::array::from_fn(|_| f32::from_bits((rng.next_u64() % 0x3f80_0001) as u32));
             let exponents: [f32; 3] = std::array::from_fn(|_| 2f32.powf(rng.range(-12.0, 14.0)));
-            let got = pow01_x4(base, exponent);
+            let got = pow01_lanes(base, exponent);
             for i in 0..4 {
                 let want = pow01(base[i], exponent[i]);
                 assert_eq!(
@@ -659,7 +579,7 @@ mod tests {
             for chunk in bits.chunks(4) {
                 let base: [f32; 4] =
                     std::array::from_fn(|i| f32::from_bits(chunk[i.min(chunk.len() - 1)]));
-                let got = pow01_x4(base, [y; 4]);
+                let got = pow01_lanes(base, [y; 4]);
                 for i in 0..4 {
                     let exact = f64::from(base[i]).powf(f64::from(y));
                     let err = (f64::from(got[i]) - exact).abs();

@@ -7,7 +7,7 @@
 //! crease (Mach band) at either edge.
 
 use super::lanes::{LANES, Vec3x4};
-use super::numeric::{finite_or_zero, pow01, pow01_x4, ramp, ramp_x4, saturate, saturate_x4};
+use super::numeric::{finite_or_zero, pow01, pow01_lanes, ramp, ramp_x4, saturate, saturate_x4};
 use glam::Vec3;
 use wide::f32x4;
 
@@ -49,10 +49,10 @@ pub fn ellipsoid_spot_intensity_x4(
     ramp_x4(-d, -1.0, -saturate(inner)).to_array()
 }
 
-/// [`light_spot_lobe`] of four cosines, lane by lane the same bits ([`pow01_x4`]).
+/// [`light_spot_lobe`] of four cosines, lane by lane the same bits ([`pow01_lanes`]).
 #[inline(always)]
 pub fn light_spot_lobe_x4(cosine: [f32; LANES], exponent: f32) -> [f32; LANES] {
-    pow01_x4(cosine, [exponent; LANES])
+    pow01_lanes(cosine, [exponent; LANES])
 }
 
 /// [`spot_gradient`] of four intensities, lane by lane the same bits.
@@ -108,7 +108,7 @@ pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
 ///
 /// Derivation: `bound = (level·(1 − 10⁻³))^(1/exponent)` in f64, rounded down to f32, so the
 /// exact lobe of any smaller cosine is at least 10⁻³ (relative) under `level`, far more than the
-/// error of the lobe's power (at most 8 ulp for normal results, `numeric::pow01_x4`). With
+/// error of the lobe's power (at most 8 ulp for normal results, `numeric::pow01_lanes`). With
 /// nothing safe to promise (`level ≤ 0`, NaN, an exponent that is not positive) the bound is
 /// −∞: no cosine is skipped.
 pub fn light_spot_cosine_below(level: f32, exponent: f32) -> f32 {
