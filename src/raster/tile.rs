@@ -174,9 +174,11 @@ impl QuadSlots {
 /// same pixels as shading each lane alone.
 ///
 /// Speed: the rasterizer runs a tile's quads in a copy compiled for the frame's
-/// [`crate::simd::SimdLevel`]; mark `shade_quad` `#[inline(always)]` (and what it calls hot,
-/// `#[inline(always)]` or `#[inline]`) so that the fragment stage lands in that copy too, rather
-/// than in one baseline function out of line.
+/// [`crate::simd::SimdLevel`]; mark `shade_quad`, `finish_triangle` and what they call hot
+/// `#[inline(always)]` so that the fragment stage lands in that copy too, rather than in
+/// baseline functions out of line. `#[inline]` alone, a large closure, or the `write` closure
+/// passed on by value (through `&mut F`'s `FnMut`) can stay out of line: pass it on as
+/// `&mut impl FnMut` (docs/performance.md, "Lit lanes in batches of 8").
 pub trait QuadShader<V>: Send + Sync {
     /// What the shader keeps between the quads of a triangle (`()` for none). One is made per
     /// tile and draw, and it is empty again after each [`QuadShader::finish_triangle`].
