@@ -746,6 +746,46 @@ mod tests {
     }
 
     #[test]
+    fn nearest_lookups_of_eight_lanes_are_single_lookups() {
+        let texels: Vec<[u8; 4]> = (0..64 * 32u32)
+            .map(|i| [0, 0, 0, (i * 37 + i / 64) as u8])
+            .collect();
+        let t = Texture::from_rgba8(64, 32, texels).expect("texture");
+        let specials = [f32::NAN, f32::INFINITY, -1e30, -0.0, 1.0, 0.999_999_9];
+        for sampler in [
+            Sampler::default(),
+            Sampler {
+                address_u: AddressMode::Clamp,
+                ..Sampler::default()
+            },
+        ] {
+            for level in 0..t.level_count() {
+                let level = t.level(level).expect("level");
+                let lookup = sampler.nearest_lookup(level);
+                for k in 0..500u32 {
+                    let point = |i: u32| {
+                        let j = k * 8 + i;
+                        let u = if j.is_multiple_of(13) {
+                            specials[(j / 13) as usize % specials.len()]
+                        } else {
+                            (j as f32 * 0.618_034).fract() * 6.0 - 3.0
+                        };
+                        (u, (j as f32 * 0.414_213_5).fract() * 4.0 - 2.0)
+                    };
+                    let (u, v): (Vec<f32>, Vec<f32>) = (0..8).map(point).unzip();
+                    let (u, v): ([f32; 8], [f32; 8]) =
+                        (u.try_into().expect("8"), v.try_into().expect("8"));
+                    let got = lookup.alpha_lanes(u, v);
+                    for i in 0..8 {
+                        let want = sampler.alpha_nearest_in(level, Vec2::new(u[i], v[i]));
+                        assert_eq!(got[i].to_bits(), want.to_bits(), "({}, {})", u[i], v[i]);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn floor_small_matches_floor() {
         for x in [
             -3.5f32,
