@@ -22,6 +22,37 @@ use super::setup::SetupTriangle;
 use super::varyings::Varyings;
 use glam::Vec4;
 
+/// Where the lanes of a quad take their varyings from.
+#[derive(Clone, Copy)]
+enum LaneSource<'q, V> {
+    /// Values given by hand ([`Fragment::new`]).
+    Given(&'q [V; 4]),
+    /// The triangle's corners and each lane's perspective-correct weights `b_i`: a lane is
+    /// interpolated when the fragment stage asks for it, so helper lanes cost only what the
+    /// derivatives read of them.
+    Corners {
+        corners: [&'q V; 3],
+        weights: [[f32; 4]; 3],
+    },
+}
+
+impl<'q, V: Varyings> LaneSource<'q, V> {
+    #[inline(always)]
+    fn lane(&self, lane: usize) -> V {
+        match self {
+            LaneSource::Given(values) => values[lane],
+            LaneSource::Corners { corners, weights } => V::weighted_sum(
+                corners[0],
+                weights[0][lane],
+                corners[1],
+                weights[1][lane],
+                corners[2],
+                weights[2][lane],
+            ),
+        }
+    }
+}
+
 /// What the fragment closure sees of one pixel.
 ///
 /// Lanes of a quad are numbered 0 = (x, y), 1 = (x+1, y), 2 = (x, y+1), 3 = (x+1, y+1) with
@@ -36,8 +67,8 @@ pub struct Fragment<'q, V> {
     pub depth: f32,
     /// Whether the triangle runs counter-clockwise in NDC.
     pub front_facing: bool,
-    lane: usize,
-    quad: &'q [V; 4],
+    varyings: V,
+    lanes: LaneSource<'q, V>,
 }
 
 impl<'q, V: Varyings> Fragment<'q, V> {
@@ -48,30 +79,30 @@ impl<'q, V: Varyings> Fragment<'q, V> {
             y,
             depth,
             front_facing: true,
-            lane: lane.min(3),
-            quad,
+            varyings: quad[lane.min(3)],
+            lanes: LaneSource::Given(quad),
         }
     }
 
     /// The interpolated varyings at this pixel centre.
     #[inline]
     pub fn varyings(&self) -> &V {
-        &self.quad[self.lane]
+        &self.varyings
     }
 
     /// Coarse screen-space derivatives `(d/dx, d/dy)` of any function of the varyings.
     #[inline]
     pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
-        let origin = f(&self.quad[0]);
+        let origin = f(&self.lanes.lane(0));
         (
-            T::difference(&f(&self.quad[1]), &origin),
-            T::difference(&f(&self.quad[2]), &origin),
+            T::difference(&f(&self.lanes.lane(1)), &origin),
+            T::difference(&f(&self.lanes.lane(2)), &origin),
         )
     }
 }
 
-/// One 2×2 quad as the fragment stage sees it: the four lanes' interpolated varyings (helper
-/// lanes outside the triangle included, for derivatives) and depths.
+/// One 2×2 quad as the fragment stage sees it: the four lanes' varyings (helper lanes outside
+/// the triangle included, for derivatives), interpolated on request, and their depths.
 pub struct Quad<'q, V> {
     /// Pixel column of lane 0 (even).
     pub x: u32,
@@ -81,14 +112,58 @@ pub struct Quad<'q, V> {
     pub depth: [f32; 4],
     /// Whether the triangle runs counter-clockwise in NDC.
     pub front_facing: bool,
-    varyings: &'q [V; 4],
+    lanes: LaneSource<'q, V>,
 }
 
 impl<'q, V: Varyings> Quad<'q, V> {
+    /// A quad of hand-given lanes, for testing quad shaders without rasterizing.
+    pub fn new(x: u32, y: u32, depth: [f32; 4], varyings: &'q [V; 4]) -> Self {
+        Quad {
+            x: x & !1,
+            y: y & !1,
+            depth,
+            front_facing: true,
+            lanes: LaneSource::Given(varyings),
+        }
+    }
+
     /// The interpolated varyings of every lane.
     #[inline]
-    pub fn varyings(&self) -> &'q [V; 4] {
-        self.varyings
+    pub fn varyings(&self) -> [V; 4] {
+        std::array::from_fn(|lane| self.lanes.lane(lane))
+    }
+
+    /// The interpolated varyings of lane `lane` (0..4).
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> V {
+        self.lanes.lane(lane.min(3))
+    }
+
+    /// One `f32` component of the four lanes' varyings, interpolated on its own: lane `k` is
+    /// that component of [`Quad::lane`]`(k)`, bit for bit, since interpolation weights each
+    /// component alone, for a fraction of the work. `component` returns a reference so that it
+    /// can only pick a part of the varyings, not compute from them.
+    #[inline(always)]
+    pub fn component_lanes(&self, component: impl Fn(&V) -> &f32) -> [f32; 4] {
+        let mut out = [0.0; 4];
+        match &self.lanes {
+            LaneSource::Given(values) => {
+                for (lane, value) in out.iter_mut().enumerate() {
+                    *value = *component(&values[lane]);
+                }
+            }
+            LaneSource::Corners { corners, weights } => {
+                let (a, b, c) = (
+                    *component(corners[0]),
+                    *component(corners[1]),
+                    *component(corners[2]),
+                );
+                for (lane, value) in out.iter_mut().enumerate() {
+                    *value = (a * weights[0][lane] + b * weights[1][lane]) + c * weights[2][lane];
+                }
+            }
+        }
+        out
     }
 
     /// Lane `lane` (0..4) as a single fragment.
@@ -100,15 +175,19 @@ impl<'q, V: Varyings> Quad<'q, V> {
             y: self.y + (lane as u32 >> 1),
             depth: self.depth[lane],
             front_facing: self.front_facing,
-            lane,
-            quad: self.varyings,
+            varyings: self.lanes.lane(lane),
+            lanes: self.lanes,
         }
     }
 
     /// Coarse screen-space derivatives, the same for every lane (see [`Fragment::derivatives`]).
     #[inline]
     pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
-        self.fragment(0).derivatives(f)
+        let origin = f(&self.lanes.lane(0));
+        (
+            T::difference(&f(&self.lanes.lane(1)), &origin),
+            T::difference(&f(&self.lanes.lane(2)), &origin),
+        )
     }
 }
 
@@ -323,7 +402,6 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
     let x_start = r.x0 & !1;
     let (mut shaded, mut written) = (0u64, 0u64);
-    let mut quad = [*varyings[0]; 4];
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
@@ -370,22 +448,12 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
             let sum = (p[0] + p[1]) + p[2];
             let perspective = sum.cmpgt(Vec4::ZERO) & sum.is_finite_mask();
             let inv = Vec4::ONE / sum;
-            let b = [
+            let weights = [
                 Vec4::select(perspective, p[0] * inv, l[0]).to_array(),
                 Vec4::select(perspective, p[1] * inv, l[1]).to_array(),
                 Vec4::select(perspective, p[2] * inv, l[2]).to_array(),
             ];
             let z = z.to_array();
-            for (lane, q) in quad.iter_mut().enumerate() {
-                *q = V::weighted_sum(
-                    varyings[0],
-                    b[0][lane],
-                    varyings[1],
-                    b[1][lane],
-                    varyings[2],
-                    b[2][lane],
-                );
-            }
             let quad_index = (qy - tile.y0) as usize * tile_width + (qx - tile.x0) as usize;
             let lane_offsets = [0, 1, tile_width, tile_width + 1];
             // The depth test of all lanes first: lanes are distinct pixels, so testing them
@@ -418,7 +486,10 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 y: qy,
                 depth: z,
                 front_facing: tri.front_facing,
-                varyings: &quad,
+                lanes: LaneSource::Corners {
+                    corners: varyings,
+                    weights,
+                },
             };
             let slots = QuadSlots {
                 origin: quad_index as u32,
@@ -537,5 +608,71 @@ mod tests {
             assert_eq!(f.derivatives(|v| *v * 2.0), (4.0, 12.0));
         }
         assert_eq!(*Fragment::new(0, 0, 0.5, &quad, 3).varyings(), 20.0);
+    }
+
+    /// A quad interpolated from corners, as the rasterizer makes it.
+    fn quad_from_corners<'q>(
+        corners: [&'q [f32; 6]; 3],
+        weights: [[f32; 4]; 3],
+    ) -> Quad<'q, [f32; 6]> {
+        Quad {
+            x: 0,
+            y: 0,
+            depth: [0.5; 4],
+            front_facing: true,
+            lanes: LaneSource::Corners { corners, weights },
+        }
+    }
+
+    #[test]
+    fn a_component_interpolated_alone_is_that_component_of_the_whole_lane() {
+        let specials = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.5,
+            1e-40,
+            3e38,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        let mut bits = 0x9e37_79b9u32;
+        let mut next = |k: usize| {
+            bits ^= bits << 13;
+            bits ^= bits >> 17;
+            bits ^= bits << 5;
+            if bits % 7 == 0 {
+                specials[k % specials.len()]
+            } else {
+                (bits as f32 / u32::MAX as f32 - 0.5) * 16.0
+            }
+        };
+        for round in 0..2000 {
+            let corners: [[f32; 6]; 3] =
+                std::array::from_fn(|c| std::array::from_fn(|i| next(round + c + i)));
+            let weights: [[f32; 4]; 3] =
+                std::array::from_fn(|c| std::array::from_fn(|l| next(round * 3 + c + l)));
+            let quad = quad_from_corners([&corners[0], &corners[1], &corners[2]], weights);
+            let whole = quad.varyings();
+            for i in 0..6 {
+                let alone = quad.component_lanes(|v| &v[i]);
+                for lane in 0..4 {
+                    assert_eq!(
+                        alone[lane].to_bits(),
+                        whole[lane][i].to_bits(),
+                        "component {i}, lane {lane}: {corners:?} {weights:?}"
+                    );
+                    assert_eq!(quad.lane(lane)[i].to_bits(), whole[lane][i].to_bits());
+                }
+            }
+            // Hand-given lanes read back as given.
+            let given = Quad::new(4, 6, [0.5; 4], &whole);
+            for i in 0..6 {
+                let alone = given.component_lanes(|v| &v[i]);
+                for lane in 0..4 {
+                    assert_eq!(alone[lane].to_bits(), whole[lane][i].to_bits());
+                }
+            }
+        }
     }
 }

@@ -552,7 +552,7 @@ pub fn shade_fur(
     let v = f.varyings();
     let reads = LevelReads::new(textures, lod);
     let unit_normal = v.normal.normalize_or_zero();
-    match surface(v, unit_normal, &reads, textures, maps, layer, p) {
+    match surface(&v.into(), unit_normal, &reads, textures, maps, layer, p) {
         Surface::Discarded => None,
         Surface::Finished(colour) => Some(colour),
         Surface::Lit(mut lit, lookups) => {
@@ -608,14 +608,12 @@ pub fn shade_fur_quad<'a>(
     p: &ShadeParams,
     mut write: impl FnMut(PixelSlot, Vec4),
 ) {
-    let (ddx, ddy) = quad.derivatives(|v| v.uv);
+    let read = SurfaceLanes::of(quad);
+    let (ddx, ddy) = read.uv_derivatives();
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let reads = LevelReads::new(textures, lod);
-    let varyings = quad.varyings();
-    let lanes_of =
-        |field: fn(&FurVaryings) -> Vec3| Vec3x4::from_lanes(varyings.each_ref().map(field));
     // The burn lobes and the light spots need each lane's unit normal: four at once.
-    let unit_normals = lanes_of(|v| v.normal).normalize_or_zero();
+    let unit_normals = vec3_lanes(quad, |v| &v.normal).normalize_or_zero();
     let lanes = slots.lanes();
     let mut lit = 0u32;
     let mut surfaces = [LitSurface::ZERO; 4];
@@ -625,7 +623,7 @@ pub fn shade_fur_quad<'a>(
             continue;
         }
         match surface(
-            &varyings[lane],
+            &read.lane(lane),
             unit_normals.lane(lane),
             &reads,
             textures,
@@ -651,7 +649,7 @@ pub fn shade_fur_quad<'a>(
     }
     // Step 4's spots on the quad's lanes together.
     if !p.spots.is_empty() {
-        let objects = lanes_of(|v| v.object);
+        let objects = vec3_lanes(quad, |v| &v.object);
         let mut strands = Vec3x4::from_lanes(surfaces.map(|l| l.strand));
         for spot in &p.spots {
             let weights = spot.weights_x4(&objects, &unit_normals);
@@ -669,6 +667,7 @@ pub fn shade_fur_quad<'a>(
         batch.light(textures.sampler, layer, p, &mut write);
     }
     batch.shadow_level = Some(shadow_level);
+    let toward = LitLanes::of(quad);
     for lane in 0..4 {
         if lit & (1 << lane) == 0 {
             continue;
@@ -684,7 +683,8 @@ pub fn shade_fur_quad<'a>(
                 ..*l
             },
             lookups[lane],
-            &varyings[lane],
+            &toward,
+            lane,
         );
     }
 }
@@ -738,7 +738,14 @@ impl<'a> LitBatch<'a> {
 
     /// Adds one lit lane; the caller lights the batch when it is full.
     #[inline(always)]
-    fn push(&mut self, slot: PixelSlot, lit: LitSurface, lookups: ShadowLookups, v: &FurVaryings) {
+    fn push(
+        &mut self,
+        slot: PixelSlot,
+        lit: LitSurface,
+        lookups: ShadowLookups,
+        toward: &LitLanes,
+        lane: usize,
+    ) {
         let i = self.len;
         self.slots[i] = Some(slot);
         self.alpha[i] = lit.alpha;
@@ -751,10 +758,10 @@ impl<'a> LitBatch<'a> {
                 (0.0, uv, offset)
             }
         };
-        set_lane(&mut self.wind, i, v.wind);
-        set_lane(&mut self.lean, i, v.lean);
-        set_lane(&mut self.light, i, v.light);
-        set_lane(&mut self.eye, i, v.eye);
+        set_lane(&mut self.wind, i, toward.wind.lane(lane));
+        set_lane(&mut self.lean, i, toward.lean.lane(lane));
+        set_lane(&mut self.light, i, toward.light.lane(lane));
+        set_lane(&mut self.eye, i, toward.eye.lane(lane));
         self.len += 1;
     }
 
@@ -1026,6 +1033,123 @@ impl LitSurface {
     }
 }
 
+/// What steps 1–4 ([`surface`]) read of one fragment's varyings.
+struct SurfaceVaryings {
+    uv: Vec2,
+    wind_uv: Vec2,
+    shadow: Vec2,
+    mesh_uv: Vec2,
+    length: f32,
+    fade: f32,
+}
+
+impl From<&FurVaryings> for SurfaceVaryings {
+    #[inline(always)]
+    fn from(v: &FurVaryings) -> Self {
+        SurfaceVaryings {
+            uv: v.uv,
+            wind_uv: v.wind_uv,
+            shadow: v.shadow,
+            mesh_uv: v.mesh_uv,
+            length: v.length,
+            fade: v.fade,
+        }
+    }
+}
+
+/// [`SurfaceVaryings`] of a quad's four lanes, interpolated component by component on the
+/// four lanes at once ([`Quad::component_lanes`]); the other varyings are interpolated only for
+/// the lanes that reach the lighting ([`LitLanes`]).
+struct SurfaceLanes {
+    uv: [[f32; 4]; 2],
+    wind_uv: [[f32; 4]; 2],
+    shadow: [[f32; 4]; 2],
+    mesh_uv: [[f32; 4]; 2],
+    length: [f32; 4],
+    fade: [f32; 4],
+}
+
+/// The lanes of one `Vec2` field, `[x, y]`.
+#[inline(always)]
+fn vec2_lanes(quad: &Quad<'_, FurVaryings>, field: fn(&FurVaryings) -> &Vec2) -> [[f32; 4]; 2] {
+    [
+        quad.component_lanes(|v| &field(v).x),
+        quad.component_lanes(|v| &field(v).y),
+    ]
+}
+
+/// The lanes of one `Vec3` field.
+#[inline(always)]
+fn vec3_lanes(quad: &Quad<'_, FurVaryings>, field: fn(&FurVaryings) -> &Vec3) -> Vec3x4 {
+    Vec3x4 {
+        x: quad.component_lanes(|v| &field(v).x),
+        y: quad.component_lanes(|v| &field(v).y),
+        z: quad.component_lanes(|v| &field(v).z),
+    }
+}
+
+/// Lane `lane` of a `Vec2` field's lanes.
+#[inline(always)]
+fn vec2_lane(lanes: &[[f32; 4]; 2], lane: usize) -> Vec2 {
+    Vec2::new(lanes[0][lane], lanes[1][lane])
+}
+
+impl SurfaceLanes {
+    #[inline(always)]
+    fn of(quad: &Quad<'_, FurVaryings>) -> Self {
+        SurfaceLanes {
+            uv: vec2_lanes(quad, |v| &v.uv),
+            wind_uv: vec2_lanes(quad, |v| &v.wind_uv),
+            shadow: vec2_lanes(quad, |v| &v.shadow),
+            mesh_uv: vec2_lanes(quad, |v| &v.mesh_uv),
+            length: quad.component_lanes(|v| &v.length),
+            fade: quad.component_lanes(|v| &v.fade),
+        }
+    }
+
+    /// The coarse derivatives of uv ([`Quad::derivatives`]).
+    #[inline(always)]
+    fn uv_derivatives(&self) -> (Vec2, Vec2) {
+        let origin = vec2_lane(&self.uv, 0);
+        (
+            Vec2::difference(&vec2_lane(&self.uv, 1), &origin),
+            Vec2::difference(&vec2_lane(&self.uv, 2), &origin),
+        )
+    }
+
+    #[inline(always)]
+    fn lane(&self, lane: usize) -> SurfaceVaryings {
+        SurfaceVaryings {
+            uv: vec2_lane(&self.uv, lane),
+            wind_uv: vec2_lane(&self.wind_uv, lane),
+            shadow: vec2_lane(&self.shadow, lane),
+            mesh_uv: vec2_lane(&self.mesh_uv, lane),
+            length: self.length[lane],
+            fade: self.fade[lane],
+        }
+    }
+}
+
+/// The varyings that only the lighting reads (steps 5 and 7), for a quad's four lanes.
+struct LitLanes {
+    wind: Vec3x4,
+    lean: Vec3x4,
+    light: Vec3x4,
+    eye: Vec3x4,
+}
+
+impl LitLanes {
+    #[inline(always)]
+    fn of(quad: &Quad<'_, FurVaryings>) -> Self {
+        LitLanes {
+            wind: vec3_lanes(quad, |v| &v.wind),
+            lean: vec3_lanes(quad, |v| &v.lean),
+            light: vec3_lanes(quad, |v| &v.light),
+            eye: vec3_lanes(quad, |v| &v.eye),
+        }
+    }
+}
+
 /// What a layer's texture reads at one level of detail share, chosen once for the lanes of a
 /// quad: the mip levels of the colour and tangent maps.
 struct LevelReads<'a> {
@@ -1051,7 +1175,7 @@ impl<'a> LevelReads<'a> {
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the fragment, what its quad shares, and the layer's state
 fn surface(
-    v: &FurVaryings,
+    v: &SurfaceVaryings,
     unit_normal: Vec3,
     reads: &LevelReads<'_>,
     textures: LayerMaps<'_>,
