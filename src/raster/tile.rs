@@ -641,7 +641,7 @@ mod tests {
             bits ^= bits << 13;
             bits ^= bits >> 17;
             bits ^= bits << 5;
-            if bits % 7 == 0 {
+            if bits.is_multiple_of(7) {
                 specials[k % specials.len()]
             } else {
                 (bits as f32 / u32::MAX as f32 - 0.5) * 16.0
