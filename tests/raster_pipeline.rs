@@ -4,7 +4,7 @@
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use pelage::camera::{look_at, perspective};
 use pelage::raster::{
-    AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
+    AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Fragment, Frame,
     Framebuffer, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture,
 };
 
@@ -41,9 +41,56 @@ fn checker_texture(size: u32, check: u32) -> Texture {
     Texture::from_rgba8(size, size, texels).expect("texture")
 }
 
+/// The busy frame's fragment stage: the vertex colour modulated by a trilinear checker read.
+fn busy_colour(texture: &Texture, f: &Fragment<'_, (Vec4, Vec2)>) -> Option<Vec4> {
+    let (c, uv) = *f.varyings();
+    let (dx, dy) = f.derivatives(|v| v.1);
+    let t = Sampler::default().sample(texture, uv, dx, dy);
+    Some(Vec4::new(c.x * t.x, c.y, c.z * (1.0 - t.y), c.w))
+}
+
+/// A quad shader that holds every lane it shades until the rasterizer asks for them
+/// ([`QuadShader::finish`]), in reverse order: whatever it is handed meanwhile, the
+/// rasterizer must keep each pixel's blend order.
+struct Hoarder<'t>(&'t Texture);
+
+impl QuadShader<(Vec4, Vec2)> for Hoarder<'_> {
+    type Deferred = Vec<(PixelSlot, Vec4)>;
+
+    fn shade_quad(
+        &self,
+        held: &mut Self::Deferred,
+        quad: &Quad<'_, (Vec4, Vec2)>,
+        mut slots: QuadSlots,
+        _: impl FnMut(PixelSlot, Vec4),
+    ) {
+        for lane in 0..4 {
+            if let Some(slot) = slots.take(lane)
+                && let Some(colour) = busy_colour(self.0, &quad.fragment(lane))
+            {
+                held.push((slot, colour));
+            }
+        }
+    }
+
+    fn finish(&self, held: &mut Self::Deferred, mut write: impl FnMut(PixelSlot, Vec4)) {
+        while let Some((slot, colour)) = held.pop() {
+            write(slot, colour);
+        }
+    }
+}
+
 /// 10,000 overlapping, alpha-blended, textured triangles with perspective and near-plane
-/// crossings, submitted as `draws` consecutive draws.
-fn busy_frame(width: u32, height: u32, tile: u32, draws: usize) -> Vec<u8> {
+/// crossings, submitted as `draws` consecutive draws, shaded by a per-fragment closure or by
+/// [`Hoarder`].
+fn busy_frame_with(
+    width: u32,
+    height: u32,
+    tile: u32,
+    draws: usize,
+    state: DrawState,
+    hoard: bool,
+) -> Vec<u8> {
     let mut rng = Lcg(42);
     let mut vertices = Vec::new();
     let mut centre = Vec2::ZERO;
@@ -63,31 +110,49 @@ fn busy_frame(width: u32, height: u32, tile: u32, draws: usize) -> Vec<u8> {
         .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
         .collect();
     let texture = checker_texture(32, 4);
-    let sampler = Sampler::default();
     let mut fb = Framebuffer::new(width, height, tile, Vec4::new(0.1, 0.1, 0.1, 1.0)).expect("fb");
     let mut frame = Frame::new(&mut fb);
+    let vertex = |&(p, c, uv): &(Vec4, Vec4, Vec2)| ClipVertex {
+        position: p,
+        varyings: (c, uv),
+    };
     for part in triangles.chunks(triangles.len().div_ceil(draws)) {
-        frame
-            .draw(
-                &vertices,
-                part,
-                BLENDED,
-                |&(p, c, uv): &(Vec4, Vec4, Vec2)| ClipVertex {
-                    position: p,
-                    varyings: (c, uv),
-                },
-                |f| {
-                    let (c, uv) = *f.varyings();
-                    let (dx, dy) = f.derivatives(|v| v.1);
-                    let t = sampler.sample(&texture, uv, dx, dy);
-                    Some(Vec4::new(c.x * t.x, c.y, c.z * (1.0 - t.y), c.w))
-                },
-            )
-            .expect("draw");
+        if hoard {
+            frame.draw_quads(&vertices, part, state, vertex, Hoarder(&texture))
+        } else {
+            frame.draw(&vertices, part, state, vertex, |f| busy_colour(&texture, f))
+        }
+        .expect("draw");
     }
     let stats = frame.finish();
     assert!(stats.fragments_written > 50_000, "{stats:?}");
     fb.to_rgba8()
+}
+
+fn busy_frame(width: u32, height: u32, tile: u32, draws: usize) -> Vec<u8> {
+    busy_frame_with(width, height, tile, draws, BLENDED, false)
+}
+
+/// A shader may hold lanes across triangles: the rasterizer asks for them before a pixel is
+/// handed over again, after each triangle that writes depth and at the end of each tile's
+/// draw, so the pixels are those of shading each lane at once, with or without depth writes.
+#[test]
+fn lanes_held_across_triangles_keep_every_pixels_blend_order() {
+    let (w, h) = (203, 151);
+    let depth_writing = DrawState {
+        depth_write: true,
+        ..BLENDED
+    };
+    for state in [BLENDED, depth_writing] {
+        for tile in [16, 64] {
+            let at_once = busy_frame_with(w, h, tile, 1, state, false);
+            let held = busy_frame_with(w, h, tile, 1, state, true);
+            assert!(
+                held == at_once,
+                "{state:?}, tile {tile}: held lanes changed pixels"
+            );
+        }
+    }
 }
 
 #[test]

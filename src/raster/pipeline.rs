@@ -11,7 +11,9 @@ use super::bin::TileGrid;
 use super::clip::{ClipVertex, clip_triangle, needs_no_clipping};
 use super::framebuffer::{Framebuffer, TileTarget};
 use super::setup::{CullMode, SetupTriangle, setup_triangle_order};
-use super::tile::{Fragment, PerFragment, QuadShader, RasterStats, rasterize_triangle};
+use super::tile::{
+    Fragment, HeldPixels, PerFragment, QuadShader, RasterStats, finish_tile, rasterize_triangle,
+};
 use super::varyings::Varyings;
 use crate::simd::{self, Kernel, SimdLevel};
 use glam::Vec4;
@@ -180,6 +182,7 @@ where
             stats,
         } = self;
         let mut deferred = S::Deferred::default();
+        let mut held = HeldPixels::new(target.rect);
         for chunk in &draw.chunks {
             for &t in &chunk.bins[tile] {
                 let t = t as usize;
@@ -190,11 +193,13 @@ where
                     &draw.state,
                     &draw.shader,
                     &mut deferred,
+                    &mut held,
                     target,
                     stats,
                 );
             }
         }
+        finish_tile(&draw.state, &draw.shader, &mut deferred, target, stats);
     }
 }
 

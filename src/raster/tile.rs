@@ -18,7 +18,7 @@
 
 use super::framebuffer::TileTarget;
 use super::pipeline::{BlendMode, DepthCompare, DrawState};
-use super::setup::SetupTriangle;
+use super::setup::{PixelRect, SetupTriangle};
 use super::varyings::Varyings;
 use glam::Vec4;
 
@@ -195,7 +195,7 @@ impl<'q, V: Varyings> Quad<'q, V> {
 /// whose depth test passed, with the lane's depth. Only the rasterizer makes them, one per
 /// shaded lane, and writing one consumes it (it is neither `Copy` nor `Clone`), so a shader
 /// reaches no pixel the triangle does not cover and writes none twice, whether it writes
-/// during [`QuadShader::shade_quad`] or keeps the slot until [`QuadShader::finish_triangle`].
+/// during [`QuadShader::shade_quad`] or keeps the slot until [`QuadShader::finish`].
 #[derive(Debug)]
 pub struct PixelSlot {
     /// Index into the tile's pixels.
@@ -243,28 +243,32 @@ impl QuadSlots {
 /// level of detail of coarse derivatives) and batch independent lanes through its costliest
 /// terms.
 ///
-/// A shader may also keep lanes of several quads of one triangle in [`QuadShader::Deferred`]
-/// and shade them together: the quads of one triangle cover distinct pixels, so their order
-/// does not matter to the blend, and the rasterizer calls [`QuadShader::finish_triangle`]
-/// before the next triangle touches the tile.
+/// A shader may also keep lanes of several quads in [`QuadShader::Deferred`] and shade them
+/// together, across triangles. The rasterizer keeps every pixel's blend order: it calls
+/// [`QuadShader::finish`] before it hands over a lane whose pixel it handed over since the last
+/// `finish` (in a draw without depth writes it keeps one bit per pixel of the tile for this),
+/// after each triangle of a draw that writes depth (a later triangle's depth test reads what
+/// it wrote), and at the end of each tile's draw. The lanes held are therefore always distinct
+/// pixels, and their order does not matter to the blend: in a closed mesh, where each pixel is
+/// covered once per draw, the shader's batches run full across the triangles.
 ///
 /// Contract: the colour given for a lane depends only on its quad and the lane — never on
 /// which other lanes are shaded, nor on which lanes share a batch — so a quad shader gives the
 /// same pixels as shading each lane alone.
 ///
 /// Speed: the rasterizer runs a tile's quads in a copy compiled for the frame's
-/// [`crate::simd::SimdLevel`]; mark `shade_quad`, `finish_triangle` and what they call hot
+/// [`crate::simd::SimdLevel`]; mark `shade_quad`, `finish` and what they call hot
 /// `#[inline(always)]` so that the fragment stage lands in that copy too, rather than in
 /// baseline functions out of line. `#[inline]` alone, a large closure, or the `write` closure
 /// passed on by value (through `&mut F`'s `FnMut`) can stay out of line: pass it on as
 /// `&mut impl FnMut` (docs/performance.md, "Lit lanes in batches of 8").
 pub trait QuadShader<V>: Send + Sync {
-    /// What the shader keeps between the quads of a triangle (`()` for none). One is made per
-    /// tile and draw, and it is empty again after each [`QuadShader::finish_triangle`].
+    /// What the shader keeps between quads (`()` for none). One is made per tile and draw, and
+    /// it is empty again after each [`QuadShader::finish`].
     type Deferred: Default;
 
     /// Shades the lanes of `slots` ([`QuadSlots::lanes`]) and writes the colour of each lane
-    /// it keeps to the lane's slot, now or by [`QuadShader::finish_triangle`]; a lane never
+    /// it keeps to the lane's slot, now or by [`QuadShader::finish`]; a lane never
     /// written is discarded.
     fn shade_quad(
         &self,
@@ -274,9 +278,9 @@ pub trait QuadShader<V>: Send + Sync {
         write: impl FnMut(PixelSlot, Vec4),
     );
 
-    /// Writes what `deferred` still holds; called after the last quad of each triangle.
+    /// Writes what `deferred` still holds (see the trait's doc for when it is called).
     #[inline(always)]
-    fn finish_triangle(&self, deferred: &mut Self::Deferred, write: impl FnMut(PixelSlot, Vec4)) {
+    fn finish(&self, deferred: &mut Self::Deferred, write: impl FnMut(PixelSlot, Vec4)) {
         let _ = (deferred, write);
     }
 }
@@ -329,6 +333,86 @@ impl std::ops::AddAssign for RasterStats {
     }
 }
 
+/// The pixels of one tile that a draw without depth writes handed to its shader since the
+/// shader's last [`QuadShader::finish`], one bit each: lanes it may still hold. Each tile row
+/// starts a word, so a quad's two lanes in a row (its column is even, as tiles start on even
+/// pixels) are two adjacent bits of one word.
+pub(crate) struct HeldPixels {
+    words: Vec<u64>,
+    row_words: usize,
+}
+
+impl HeldPixels {
+    /// None held, for a tile of `rect`'s size.
+    pub(crate) fn new(rect: PixelRect) -> Self {
+        let row_words = (rect.x1 - rect.x0 + 1).div_ceil(64) as usize;
+        // One row more: the lower lanes of a quad on a last, odd row (masked off) still index.
+        let rows = (rect.y1 - rect.y0 + 1) as usize;
+        HeldPixels {
+            words: vec![0; row_words * rows],
+            row_words,
+        }
+    }
+
+    /// The word of the quad's upper lanes and the shift of its column within it; the lower
+    /// lanes are `row_words` further. `column` and `row` are tile coordinates, `column` even.
+    #[inline(always)]
+    fn locate(&self, column: u32, row: u32) -> (usize, u32) {
+        (
+            row as usize * self.row_words + (column >> 6) as usize,
+            column & 63,
+        )
+    }
+
+    /// Whether any lane of `lanes` (bit k = lane k) of the quad at (`column`, `row`) is held.
+    #[inline(always)]
+    fn any(&self, column: u32, row: u32, lanes: u32) -> bool {
+        let (word, shift) = self.locate(column, row);
+        let upper = u64::from(lanes & 3) << shift;
+        let lower = u64::from((lanes >> 2) & 3) << shift;
+        (self.words[word] & upper) | (self.words[word + self.row_words] & lower) != 0
+    }
+
+    /// Marks the lanes of `lanes` of the quad at (`column`, `row`) held.
+    #[inline(always)]
+    fn mark(&mut self, column: u32, row: u32, lanes: u32) {
+        let (word, shift) = self.locate(column, row);
+        self.words[word] |= u64::from(lanes & 3) << shift;
+        self.words[word + self.row_words] |= u64::from((lanes >> 2) & 3) << shift;
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.words.fill(0);
+    }
+}
+
+/// Ends one draw in one tile: the shader writes what it still holds.
+#[inline(always)]
+pub(crate) fn finish_tile<V, S>(
+    state: &DrawState,
+    shader: &S,
+    deferred: &mut S::Deferred,
+    target: &mut TileTarget,
+    stats: &mut RasterStats,
+) where
+    V: Varyings,
+    S: QuadShader<V>,
+{
+    let mut written = 0u64;
+    match (state.blend, state.depth_write) {
+        (BlendMode::Alpha, false) => shader.finish(deferred, |slot, colour| {
+            written += 1;
+            write_slot::<ALPHA, NO>(state, target, slot, colour);
+        }),
+        _ => shader.finish(deferred, |slot, colour| {
+            written += 1;
+            write_slot::<DYNAMIC, DYNAMIC>(state, target, slot, colour);
+        }),
+    }
+    stats.fragments_written += written;
+}
+
 /// Rasterizes one set-up triangle into the part of it that lies in `target`.
 ///
 /// The common fixed-function states are compiled into their own copies of the quad loop, so the
@@ -337,12 +421,14 @@ impl std::ops::AddAssign for RasterStats {
 /// `#[inline(always)]`, as is the quad loop: the whole path lands in each [`crate::simd`] level's
 /// copy of the tile replay.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // the triangle, the draw, and the tile's state and counters
 pub(crate) fn rasterize_triangle<V, S>(
     tri: &SetupTriangle,
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
     deferred: &mut S::Deferred,
+    held: &mut HeldPixels,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
@@ -353,14 +439,14 @@ pub(crate) fn rasterize_triangle<V, S>(
     match (state.depth_compare, state.blend, state.depth_write) {
         // Blended layers over an opaque base (shells, fins): test, no write.
         (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, S, LESS_EQUAL, ALPHA, NO>(
-            tri, varyings, state, shader, deferred, target, stats,
+            tri, varyings, state, shader, deferred, held, target, stats,
         ),
         // Opaque geometry.
         (D::Less, B::Replace, true) => rasterize_quads::<V, S, LESS, REPLACE, YES>(
-            tri, varyings, state, shader, deferred, target, stats,
+            tri, varyings, state, shader, deferred, held, target, stats,
         ),
         _ => rasterize_quads::<V, S, DYNAMIC, DYNAMIC, DYNAMIC>(
-            tri, varyings, state, shader, deferred, target, stats,
+            tri, varyings, state, shader, deferred, held, target, stats,
         ),
     }
 }
@@ -375,12 +461,14 @@ const NO: u8 = 1;
 const YES: u8 = 2;
 
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // as `rasterize_triangle`
 fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     tri: &SetupTriangle,
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
     deferred: &mut S::Deferred,
+    held: &mut HeldPixels,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
@@ -402,6 +490,12 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
     let x_start = r.x0 & !1;
     let (mut shaded, mut written) = (0u64, 0u64);
+    // Without depth writes the shader may hold lanes past this triangle (`HeldPixels`).
+    let writes_depth = match WRITE {
+        NO => false,
+        YES => true,
+        _ => state.depth_write,
+    };
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
@@ -497,6 +591,17 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 depth: z,
                 open: passed,
             };
+            if !writes_depth {
+                let (column, row) = (qx - tile.x0, qy - tile.y0);
+                if held.any(column, row, passed) {
+                    shader.finish(deferred, |slot, colour| {
+                        written += 1;
+                        write_slot::<BLEND, WRITE>(state, target, slot, colour);
+                    });
+                    held.clear();
+                }
+                held.mark(column, row, passed);
+            }
             shader.shade_quad(deferred, &quad_view, slots, |slot, colour| {
                 written += 1;
                 write_slot::<BLEND, WRITE>(state, target, slot, colour);
@@ -504,10 +609,12 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
             qx += 2;
         }
     }
-    shader.finish_triangle(deferred, |slot, colour| {
-        written += 1;
-        write_slot::<BLEND, WRITE>(state, target, slot, colour);
-    });
+    if writes_depth {
+        shader.finish(deferred, |slot, colour| {
+            written += 1;
+            write_slot::<BLEND, WRITE>(state, target, slot, colour);
+        });
+    }
     stats.fragments_shaded += shaded;
     stats.fragments_written += written;
 }

@@ -693,7 +693,7 @@ pub fn shade_fur_quad<'a>(
 /// instructions in the AVX2 copy of the hot path.
 pub const LIT_LANES: usize = 8;
 
-/// Lit fragments of one triangle's quads waiting for steps 5–7 (the shell shadow's lookups,
+/// Lit fragments of a draw's quads in one tile waiting for steps 5–7 (the shell shadow's lookups,
 /// the lit tangent, strand lighting and eq. 3.7), which run on [`LIT_LANES`] lanes at once, one
 /// array per component. Only lanes that reach the lighting are held, so a batch is full
 /// whatever the quads' coverage, and the lookups of all its lanes read one mip level.
@@ -905,7 +905,7 @@ impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     }
 
     #[inline(always)]
-    fn finish_triangle(&self, batch: &mut LitBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
+    fn finish(&self, batch: &mut LitBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
         batch.light(self.textures.sampler, &self.layer, self.params, &mut write);
     }
 }
