@@ -267,13 +267,19 @@ fn neighbouring_fins_join_without_a_hard_edge() {
             joins += 1;
             for (end, start) in [(&this[1], &next[0]), (&this[2], &next[3])] {
                 assert_eq!(end.0, start.0, "{name}: fin {k}: positions part");
-                assert_eq!(end.1.fade, start.1.fade, "{name}: fin {k}: opacity steps");
-                let du = end.1.uv.x - start.1.uv.x;
+                assert_eq!(
+                    end.1.surface.fade, start.1.surface.fade,
+                    "{name}: fin {k}: opacity steps"
+                );
+                let du = end.1.surface.uv.x - start.1.surface.uv.x;
                 assert!(
                     du == 0.0 || (du.round() == du && du != 0.0),
                     "{name}: fin {k}: u jumps by {du}"
                 );
-                assert_eq!(end.1.uv.y, start.1.uv.y, "{name}: fin {k}: v differs");
+                assert_eq!(
+                    end.1.surface.uv.y, start.1.surface.uv.y,
+                    "{name}: fin {k}: v differs"
+                );
             }
         }
         // Nearly every fin continues the one before it (chains end only at branches, borders

@@ -609,18 +609,18 @@ impl GpuContext {
                         .flat_map(|(p, f)| {
                             let mut out = Vec::with_capacity(FIN_FLOATS);
                             out.extend(p.to_array());
-                            out.extend(f.uv.to_array());
-                            out.extend(f.light.to_array());
-                            out.extend(f.eye.to_array());
-                            out.extend(f.shadow.to_array());
-                            out.push(f.fade);
-                            out.extend(f.object.to_array());
-                            out.extend(f.normal.to_array());
-                            out.extend(f.wind_uv.to_array());
-                            out.extend(f.wind.to_array());
-                            out.extend(f.mesh_uv.to_array());
-                            out.push(f.length);
-                            out.extend(f.lean.to_array());
+                            out.extend(f.surface.uv.to_array());
+                            out.extend(f.lit.light.to_array());
+                            out.extend(f.lit.eye.to_array());
+                            out.extend(f.surface.shadow.to_array());
+                            out.push(f.surface.fade);
+                            out.extend(f.surface.object.to_array());
+                            out.extend(f.surface.normal.to_array());
+                            out.extend(f.surface.wind_uv.to_array());
+                            out.extend(f.lit.wind.to_array());
+                            out.extend(f.surface.mesh_uv.to_array());
+                            out.push(f.surface.length);
+                            out.extend(f.lit.lean.to_array());
                             out
                         })
                         .collect();

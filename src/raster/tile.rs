@@ -139,31 +139,24 @@ impl<'q, V: Varyings> Quad<'q, V> {
         self.lanes.lane(lane.min(3))
     }
 
-    /// One `f32` component of the four lanes' varyings, interpolated on its own: lane `k` is
-    /// that component of [`Quad::lane`]`(k)`, bit for bit, since interpolation weights each
-    /// component alone, for a fraction of the work. `component` returns a reference so that it
-    /// can only pick a part of the varyings, not compute from them.
+    /// One field of lane `lane`'s varyings, interpolated on its own: the same bits as that
+    /// field of [`Quad::lane`], since interpolation weights each component alone, for a
+    /// fraction of the work. `field` returns a reference so that it can only pick a part of
+    /// the varyings, not compute from them.
     #[inline(always)]
-    pub fn component_lanes(&self, component: impl Fn(&V) -> &f32) -> [f32; 4] {
-        let mut out = [0.0; 4];
+    pub fn field<T: Varyings>(&self, lane: usize, field: impl Fn(&V) -> &T) -> T {
+        let lane = lane.min(3);
         match &self.lanes {
-            LaneSource::Given(values) => {
-                for (lane, value) in out.iter_mut().enumerate() {
-                    *value = *component(&values[lane]);
-                }
-            }
-            LaneSource::Corners { corners, weights } => {
-                let (a, b, c) = (
-                    *component(corners[0]),
-                    *component(corners[1]),
-                    *component(corners[2]),
-                );
-                for (lane, value) in out.iter_mut().enumerate() {
-                    *value = (a * weights[0][lane] + b * weights[1][lane]) + c * weights[2][lane];
-                }
-            }
+            LaneSource::Given(values) => *field(&values[lane]),
+            LaneSource::Corners { corners, weights } => T::weighted_sum(
+                field(corners[0]),
+                weights[0][lane],
+                field(corners[1]),
+                weights[1][lane],
+                field(corners[2]),
+                weights[2][lane],
+            ),
         }
-        out
     }
 
     /// Lane `lane` (0..4) as a single fragment.
@@ -732,7 +725,7 @@ mod tests {
     }
 
     #[test]
-    fn a_component_interpolated_alone_is_that_component_of_the_whole_lane() {
+    fn a_field_interpolated_alone_is_that_field_of_the_whole_lane() {
         let specials = [
             0.0f32,
             -0.0,
@@ -762,7 +755,7 @@ mod tests {
             let quad = quad_from_corners([&corners[0], &corners[1], &corners[2]], weights);
             let whole = quad.varyings();
             for i in 0..6 {
-                let alone = quad.component_lanes(|v| &v[i]);
+                let alone: [f32; 4] = std::array::from_fn(|lane| quad.field(lane, |v| &v[i]));
                 for lane in 0..4 {
                     assert_eq!(
                         alone[lane].to_bits(),
@@ -775,7 +768,7 @@ mod tests {
             // Hand-given lanes read back as given.
             let given = Quad::new(4, 6, [0.5; 4], &whole);
             for i in 0..6 {
-                let alone = given.component_lanes(|v| &v[i]);
+                let alone: [f32; 4] = std::array::from_fn(|lane| given.field(lane, |v| &v[i]));
                 for lane in 0..4 {
                     assert_eq!(alone[lane].to_bits(), whole[lane][i].to_bits());
                 }

@@ -38,54 +38,82 @@ use glam::{Vec2, Vec3, Vec4};
 /// ([`shading::SHADOW_OPAQUE_ALPHA`]).
 pub const ALPHA_DISCARD: f32 = shading::SHADOW_OPAQUE_ALPHA;
 
-/// What the vertex stage hands the fur fragment stage.
+/// What the vertex stage hands the fur fragment stage: what every shaded fragment reads,
+/// then what only lit fragments read, so that the fragment stage interpolates each part only
+/// for the lanes that need it ([`Quad::field`]).
 ///
 /// `repr(C)` of `f32` fields only (bytemuck's `Pod` checks that there is no padding), so that
 /// interpolation can run over all components as one array.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FurVaryings {
+    /// Steps 1–4 (texture reads, alpha test, burn, spots, the shadow's lookups).
+    pub surface: SurfaceVaryings,
+    /// The lighting (steps 5 and 7).
+    pub lit: LitVaryings,
+}
+
+/// The part of [`FurVaryings`] that every shaded fragment reads.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SurfaceVaryings {
     /// Fur texture coordinates (mesh uv × repeat).
     pub uv: Vec2,
-    /// Direction towards the light, tangent space.
-    pub light: Vec3,
-    /// Vector towards the eye, tangent space (not normalised).
-    pub eye: Vec3,
-    /// The shadow lookup: uv offset towards the light over the fur above this layer.
-    pub shadow: Vec2,
-    /// Opacity factor: 1 on shells; on fins it fades to 0 towards the ends of the angle window.
-    pub fade: f32,
-    /// The skin point under this fragment, object space (spots and stripes are fixed to it).
-    pub object: Vec3,
-    /// The skin normal, object space (light spots and matches are fixed to the object).
-    pub normal: Vec3,
     /// The wind's uv displacement of this layer: the texel landing here comes from `uv − wind_uv`.
     pub wind_uv: Vec2,
-    /// The wind vector (direction × force) in tangent space.
-    pub wind: Vec3,
+    /// The shadow lookup: uv offset towards the light over the fur above this layer.
+    pub shadow: Vec2,
     /// Mesh uv of the skin point (where the surface maps are read).
     pub mesh_uv: Vec2,
     /// The length map's value at the vertices (1 without one), interpolated: the vertex stage
     /// scaled the layer's height by it.
     pub length: f32,
+    /// Opacity factor: 1 on shells; on fins it fades to 0 towards the ends of the angle window.
+    pub fade: f32,
+    /// The skin normal, object space (light spots and matches are fixed to the object).
+    pub normal: Vec3,
+    /// The skin point under this fragment, object space (spots and stripes are fixed to it).
+    pub object: Vec3,
+}
+
+/// The part of [`FurVaryings`] that only lit fragments read.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct LitVaryings {
+    /// Direction towards the light, tangent space.
+    pub light: Vec3,
+    /// Vector towards the eye, tangent space (not normalised).
+    pub eye: Vec3,
+    /// The wind vector (direction × force) in tangent space.
+    pub wind: Vec3,
     /// The lean of gravity, the object's motion and combing (tangent space; zero without them).
     pub lean: Vec3,
 }
 
 /// Number of `f32` components of [`FurVaryings`].
+#[cfg(test)]
 const FUR_VARYING_FLOATS: usize = size_of::<FurVaryings>() / size_of::<f32>();
 
-impl Varyings for FurVaryings {
-    /// Component by component `(a·wa + b·wb) + c·wc`, like every field's own `weighted_sum`,
-    /// over the struct seen as one array, which the compiler runs on packed registers.
-    #[inline]
-    fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
-        let [a, b, c] = [a, b, c].map(bytemuck::cast_ref::<Self, [f32; FUR_VARYING_FLOATS]>);
-        bytemuck::cast(<[f32; FUR_VARYING_FLOATS]>::weighted_sum(
-            a, wa, b, wb, c, wc,
-        ))
-    }
+/// Implements [`Varyings`] for a `repr(C)` struct of `f32` fields: component by component
+/// `(a·wa + b·wb) + c·wc`, like every field's own `weighted_sum`, over the struct seen as one
+/// array, which the compiler runs on packed registers.
+macro_rules! pod_varyings {
+    ($($t:ty),*) => {$(
+        impl Varyings for $t {
+            #[inline(always)]
+            fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
+                const FLOATS: usize = size_of::<$t>() / size_of::<f32>();
+                let [a, b, c] = [a, b, c].map(bytemuck::cast_ref::<Self, [f32; FLOATS]>);
+                let mut out = [0.0f32; FLOATS];
+                for i in 0..FLOATS {
+                    out[i] = (a[i] * wa + b[i] * wb) + c[i] * wc;
+                }
+                bytemuck::cast(out)
+            }
+        }
+    )*};
 }
+pod_varyings!(FurVaryings, SurfaceVaryings, LitVaryings);
 
 /// A spot, resolved from the scene.
 #[derive(Clone, Copy, Debug)]
@@ -547,16 +575,16 @@ pub fn shade_fur(
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Option<Vec4> {
-    let (ddx, ddy) = f.derivatives(|v| v.uv);
+    let (ddx, ddy) = f.derivatives(|v| v.surface.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let v = f.varyings();
     let reads = LevelReads::new(textures, lod);
-    let unit_normal = v.normal.normalize_or_zero();
-    match surface(&v.into(), unit_normal, &reads, textures, maps, layer, p) {
+    let unit_normal = v.surface.normal.normalize_or_zero();
+    match surface(&v.surface, unit_normal, &reads, textures, maps, layer, p) {
         Surface::Discarded => None,
         Surface::Finished(colour) => Some(colour),
         Surface::Lit(mut lit, lookups) => {
-            lit.strand = spotted_strand(lit.strand, v.object, unit_normal, lit.burn, p);
+            lit.strand = spotted_strand(lit.strand, v.surface.object, unit_normal, lit.burn, p);
             let shadow = match lookups {
                 ShadowLookups::Taken(shadow) => shadow,
                 ShadowLookups::Pending { uv, offset } => {
@@ -575,10 +603,10 @@ pub fn shade_fur(
                 Err(finished) => return Some(finished),
             };
             let lighting = shading::strand_lighting(
-                lit.tangent(v, layer, p),
+                lit.tangent(&v.lit, layer, p),
                 Vec3::Z,
-                v.light.normalize_or_zero(),
-                v.eye.normalize_or_zero(),
+                v.lit.light.normalize_or_zero(),
+                v.lit.eye.normalize_or_zero(),
                 p.exponents,
                 p.tangents,
                 p.tangent_shift,
@@ -608,13 +636,28 @@ pub fn shade_fur_quad<'a>(
     p: &ShadeParams,
     mut write: impl FnMut(PixelSlot, Vec4),
 ) {
-    let read = SurfaceLanes::of(quad);
-    let (ddx, ddy) = read.uv_derivatives();
+    // The level of detail reads the uv of lanes 0–2 (helper lanes too); only the lanes shaded
+    // are interpolated further.
+    let uv = |lane: usize| quad.field(lane, |v| &v.surface.uv);
+    let origin = uv(0);
+    let (ddx, ddy) = (
+        Vec2::difference(&uv(1), &origin),
+        Vec2::difference(&uv(2), &origin),
+    );
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let reads = LevelReads::new(textures, lod);
-    // The burn lobes and the light spots need each lane's unit normal: four at once.
-    let unit_normals = vec3_lanes(quad, |v| &v.normal).normalize_or_zero();
     let lanes = slots.lanes();
+    let mut read = [bytemuck::Zeroable::zeroed(); 4];
+    let (mut normals, mut objects) = (Vec3x4::default(), Vec3x4::default());
+    for (lane, read) in read.iter_mut().enumerate() {
+        if lanes & (1 << lane) != 0 {
+            *read = quad.field(lane, |v| &v.surface);
+            (normals.x[lane], normals.y[lane], normals.z[lane]) = read.normal.into();
+            (objects.x[lane], objects.y[lane], objects.z[lane]) = read.object.into();
+        }
+    }
+    // The burn lobes and the light spots need each lane's unit normal: four at once.
+    let unit_normals = normals.normalize_or_zero();
     let mut lit = 0u32;
     let mut surfaces = [LitSurface::ZERO; 4];
     let mut lookups = [ShadowLookups::Taken(0.0); 4];
@@ -623,7 +666,7 @@ pub fn shade_fur_quad<'a>(
             continue;
         }
         match surface(
-            &read.lane(lane),
+            &read[lane],
             unit_normals.lane(lane),
             &reads,
             textures,
@@ -649,7 +692,6 @@ pub fn shade_fur_quad<'a>(
     }
     // Step 4's spots on the quad's lanes together.
     if !p.spots.is_empty() {
-        let objects = vec3_lanes(quad, |v| &v.object);
         let mut strands = Vec3x4::from_lanes(surfaces.map(|l| l.strand));
         for spot in &p.spots {
             let weights = spot.weights_x4(&objects, &unit_normals);
@@ -667,7 +709,6 @@ pub fn shade_fur_quad<'a>(
         batch.light(textures.sampler, layer, p, &mut write);
     }
     batch.shadow_level = Some(shadow_level);
-    let toward = LitLanes::of(quad);
     for lane in 0..4 {
         if lit & (1 << lane) == 0 {
             continue;
@@ -683,8 +724,7 @@ pub fn shade_fur_quad<'a>(
                 ..*l
             },
             lookups[lane],
-            &toward,
-            lane,
+            &quad.field(lane, |v| &v.lit),
         );
     }
 }
@@ -738,14 +778,7 @@ impl<'a> LitBatch<'a> {
 
     /// Adds one lit lane; the caller lights the batch when it is full.
     #[inline(always)]
-    fn push(
-        &mut self,
-        slot: PixelSlot,
-        lit: LitSurface,
-        lookups: ShadowLookups,
-        toward: &LitLanes,
-        lane: usize,
-    ) {
+    fn push(&mut self, slot: PixelSlot, lit: LitSurface, lookups: ShadowLookups, v: &LitVaryings) {
         let i = self.len;
         self.slots[i] = Some(slot);
         self.alpha[i] = lit.alpha;
@@ -758,10 +791,10 @@ impl<'a> LitBatch<'a> {
                 (0.0, uv, offset)
             }
         };
-        set_lane(&mut self.wind, i, toward.wind.lane(lane));
-        set_lane(&mut self.lean, i, toward.lean.lane(lane));
-        set_lane(&mut self.light, i, toward.light.lane(lane));
-        set_lane(&mut self.eye, i, toward.eye.lane(lane));
+        set_lane(&mut self.wind, i, v.wind);
+        set_lane(&mut self.lean, i, v.lean);
+        set_lane(&mut self.light, i, v.light);
+        set_lane(&mut self.eye, i, v.eye);
         self.len += 1;
     }
 
@@ -1010,7 +1043,7 @@ impl LitSurface {
 
     /// [`lit_tangent`] of this fragment with varyings `v`.
     #[inline(always)]
-    fn tangent(&self, v: &FurVaryings, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
+    fn tangent(&self, v: &LitVaryings, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
         lit_tangent(self.encoded_tangent, v.wind, v.lean, layer, p)
     }
 
@@ -1030,123 +1063,6 @@ impl LitSurface {
             p.ambient_term,
         )
         .extend(self.alpha)
-    }
-}
-
-/// What steps 1–4 ([`surface`]) read of one fragment's varyings.
-struct SurfaceVaryings {
-    uv: Vec2,
-    wind_uv: Vec2,
-    shadow: Vec2,
-    mesh_uv: Vec2,
-    length: f32,
-    fade: f32,
-}
-
-impl From<&FurVaryings> for SurfaceVaryings {
-    #[inline(always)]
-    fn from(v: &FurVaryings) -> Self {
-        SurfaceVaryings {
-            uv: v.uv,
-            wind_uv: v.wind_uv,
-            shadow: v.shadow,
-            mesh_uv: v.mesh_uv,
-            length: v.length,
-            fade: v.fade,
-        }
-    }
-}
-
-/// [`SurfaceVaryings`] of a quad's four lanes, interpolated component by component on the
-/// four lanes at once ([`Quad::component_lanes`]); the other varyings are interpolated only for
-/// the lanes that reach the lighting ([`LitLanes`]).
-struct SurfaceLanes {
-    uv: [[f32; 4]; 2],
-    wind_uv: [[f32; 4]; 2],
-    shadow: [[f32; 4]; 2],
-    mesh_uv: [[f32; 4]; 2],
-    length: [f32; 4],
-    fade: [f32; 4],
-}
-
-/// The lanes of one `Vec2` field, `[x, y]`.
-#[inline(always)]
-fn vec2_lanes(quad: &Quad<'_, FurVaryings>, field: fn(&FurVaryings) -> &Vec2) -> [[f32; 4]; 2] {
-    [
-        quad.component_lanes(|v| &field(v).x),
-        quad.component_lanes(|v| &field(v).y),
-    ]
-}
-
-/// The lanes of one `Vec3` field.
-#[inline(always)]
-fn vec3_lanes(quad: &Quad<'_, FurVaryings>, field: fn(&FurVaryings) -> &Vec3) -> Vec3x4 {
-    Vec3x4 {
-        x: quad.component_lanes(|v| &field(v).x),
-        y: quad.component_lanes(|v| &field(v).y),
-        z: quad.component_lanes(|v| &field(v).z),
-    }
-}
-
-/// Lane `lane` of a `Vec2` field's lanes.
-#[inline(always)]
-fn vec2_lane(lanes: &[[f32; 4]; 2], lane: usize) -> Vec2 {
-    Vec2::new(lanes[0][lane], lanes[1][lane])
-}
-
-impl SurfaceLanes {
-    #[inline(always)]
-    fn of(quad: &Quad<'_, FurVaryings>) -> Self {
-        SurfaceLanes {
-            uv: vec2_lanes(quad, |v| &v.uv),
-            wind_uv: vec2_lanes(quad, |v| &v.wind_uv),
-            shadow: vec2_lanes(quad, |v| &v.shadow),
-            mesh_uv: vec2_lanes(quad, |v| &v.mesh_uv),
-            length: quad.component_lanes(|v| &v.length),
-            fade: quad.component_lanes(|v| &v.fade),
-        }
-    }
-
-    /// The coarse derivatives of uv ([`Quad::derivatives`]).
-    #[inline(always)]
-    fn uv_derivatives(&self) -> (Vec2, Vec2) {
-        let origin = vec2_lane(&self.uv, 0);
-        (
-            Vec2::difference(&vec2_lane(&self.uv, 1), &origin),
-            Vec2::difference(&vec2_lane(&self.uv, 2), &origin),
-        )
-    }
-
-    #[inline(always)]
-    fn lane(&self, lane: usize) -> SurfaceVaryings {
-        SurfaceVaryings {
-            uv: vec2_lane(&self.uv, lane),
-            wind_uv: vec2_lane(&self.wind_uv, lane),
-            shadow: vec2_lane(&self.shadow, lane),
-            mesh_uv: vec2_lane(&self.mesh_uv, lane),
-            length: self.length[lane],
-            fade: self.fade[lane],
-        }
-    }
-}
-
-/// The varyings that only the lighting reads (steps 5 and 7), for a quad's four lanes.
-struct LitLanes {
-    wind: Vec3x4,
-    lean: Vec3x4,
-    light: Vec3x4,
-    eye: Vec3x4,
-}
-
-impl LitLanes {
-    #[inline(always)]
-    fn of(quad: &Quad<'_, FurVaryings>) -> Self {
-        LitLanes {
-            wind: vec3_lanes(quad, |v| &v.wind),
-            lean: vec3_lanes(quad, |v| &v.lean),
-            light: vec3_lanes(quad, |v| &v.light),
-            eye: vec3_lanes(quad, |v| &v.eye),
-        }
     }
 }
 
@@ -1318,18 +1234,22 @@ mod tests {
             };
             let s = |f: fn(&FurVaryings) -> f32| (f(&a) * w[0] + f(&b) * w[1]) + f(&c) * w[2];
             let expected = FurVaryings {
-                uv: v2(|v| v.uv),
-                light: v3(|v| v.light),
-                eye: v3(|v| v.eye),
-                shadow: v2(|v| v.shadow),
-                fade: s(|v| v.fade),
-                object: v3(|v| v.object),
-                normal: v3(|v| v.normal),
-                wind_uv: v2(|v| v.wind_uv),
-                wind: v3(|v| v.wind),
-                mesh_uv: v2(|v| v.mesh_uv),
-                length: s(|v| v.length),
-                lean: v3(|v| v.lean),
+                surface: SurfaceVaryings {
+                    uv: v2(|v| v.surface.uv),
+                    wind_uv: v2(|v| v.surface.wind_uv),
+                    shadow: v2(|v| v.surface.shadow),
+                    mesh_uv: v2(|v| v.surface.mesh_uv),
+                    length: s(|v| v.surface.length),
+                    fade: s(|v| v.surface.fade),
+                    normal: v3(|v| v.surface.normal),
+                    object: v3(|v| v.surface.object),
+                },
+                lit: LitVaryings {
+                    light: v3(|v| v.lit.light),
+                    eye: v3(|v| v.lit.eye),
+                    wind: v3(|v| v.lit.wind),
+                    lean: v3(|v| v.lit.lean),
+                },
             };
             let bits = |v: &FurVaryings| bytemuck::cast::<_, [u32; FUR_VARYING_FLOATS]>(*v);
             assert_eq!(bits(&got), bits(&expected));

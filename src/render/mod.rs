@@ -24,7 +24,10 @@ use crate::raster::{
 };
 use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
 use crate::simd::SimdLevel;
-use fragment::{FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, ShadeParams};
+use fragment::{
+    FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, LitVaryings, ShadeParams,
+    SurfaceVaryings,
+};
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
 
@@ -766,22 +769,26 @@ impl PreparedScene {
                     ClipVertex {
                         position: view_proj * p.extend(1.0),
                         varyings: FurVaryings {
-                            uv: v.uv * repeat,
-                            light: crate::shading::to_tangent_space(light, &v.frame),
-                            eye: crate::shading::to_tangent_space(eye - p, &v.frame),
-                            shadow: crate::shading::project_to_uv(
-                                change,
-                                v.dpdu / repeat.x,
-                                v.dpdv / repeat.y,
-                            ),
-                            fade: 1.0,
-                            object: v.position,
-                            normal: v.normal,
-                            wind_uv,
-                            wind: wind_ts,
-                            mesh_uv: v.uv,
-                            length,
-                            lean,
+                            surface: SurfaceVaryings {
+                                uv: v.uv * repeat,
+                                wind_uv,
+                                shadow: crate::shading::project_to_uv(
+                                    change,
+                                    v.dpdu / repeat.x,
+                                    v.dpdv / repeat.y,
+                                ),
+                                mesh_uv: v.uv,
+                                length,
+                                fade: 1.0,
+                                normal: v.normal,
+                                object: v.position,
+                            },
+                            lit: LitVaryings {
+                                light: crate::shading::to_tangent_space(light, &v.frame),
+                                eye: crate::shading::to_tangent_space(eye - p, &v.frame),
+                                wind: wind_ts,
+                                lean,
+                            },
                         },
                     }
                 },
@@ -1020,21 +1027,25 @@ impl PreparedScene {
                     vertices.push((
                         p,
                         FurVaryings {
-                            uv,
-                            light: crate::shading::to_tangent_space(light, &frame),
-                            eye: crate::shading::to_tangent_space(eye - p, &frame),
-                            shadow,
-                            fade: match lod_fade {
-                                Some(l) => fade * l,
-                                None => fade,
+                            surface: SurfaceVaryings {
+                                uv,
+                                wind_uv: Vec2::ZERO,
+                                shadow,
+                                mesh_uv: root.uv,
+                                length,
+                                fade: match lod_fade {
+                                    Some(l) => fade * l,
+                                    None => fade,
+                                },
+                                normal: root.normal,
+                                object: root.position,
                             },
-                            object: root.position,
-                            normal: root.normal,
-                            wind_uv: Vec2::ZERO,
-                            wind: Vec3::ZERO,
-                            mesh_uv: root.uv,
-                            length,
-                            lean: Vec3::ZERO,
+                            lit: LitVaryings {
+                                light: crate::shading::to_tangent_space(light, &frame),
+                                eye: crate::shading::to_tangent_space(eye - p, &frame),
+                                wind: Vec3::ZERO,
+                                lean: Vec3::ZERO,
+                            },
                         },
                     ));
                 }
