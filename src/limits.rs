@@ -60,7 +60,7 @@ const SAMPLE_BYTES: u64 = 20; // one supersample of a bake grid
 const DOWNSAMPLE_PER_TEXEL: u64 = 12 + 12 + 4 + 1; // colour, tangent, alpha, covered
 const SHELL_PER_TEXEL: u64 = 8 + 11; // colour + tangent RGBA8 as baked, then as textures × 4/3
 const VERTEX_BYTES: u64 = 92 + 100; // mesh::Vertex plus the temporaries of building frames
-const CLIP_VERTEX_BYTES: u64 = 16 + 112; // clip position + the fur varyings
+const CLIP_VERTEX_BYTES: u64 = 16 + 112 + 40; // clip position + the fur varyings + its screen form
 const SETUP_TRIANGLE_BYTES: u64 = 160 + 12 + 8; // set-up triangle, corner indices, bin entries
 const EDGE_BYTES_PER_TRIANGLE: u64 = 180; // ~1.5 edges per triangle with their face lists
 const OBJ_BYTES_PER_TRIANGLE: u64 = 3 * 24 + 3 * 48 + 64; // tobj faces, index map, copies
@@ -580,7 +580,8 @@ mod tests {
             SETUP_TRIANGLE_BYTES,
             size_of::<SetupTriangle>() + corners_and_bin
         );
-        assert!(CLIP_VERTEX_BYTES >= size_of::<ClipVertex<FurVaryings>>() as u64);
+        let screen = size_of::<(crate::raster::setup::ScreenVertex, bool)>();
+        assert!(CLIP_VERTEX_BYTES >= (size_of::<ClipVertex<FurVaryings>>() + screen) as u64);
     }
     use std::path::Path;
 

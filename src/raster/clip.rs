@@ -64,9 +64,14 @@ fn outcode(p: Vec4) -> u8 {
 /// plane): the common case, whose vertices the rasterizer keeps by index.
 #[inline]
 pub fn needs_no_clipping<V: Varyings>(triangle: &[ClipVertex<V>; 3]) -> bool {
-    triangle
-        .iter()
-        .all(|v| v.position.is_finite() && outcode(v.position) == 0)
+    triangle.iter().all(|v| inside_clip_volume(v.position))
+}
+
+/// Whether a clip-space position is finite and inside every plane: a triangle of three such
+/// vertices needs no clipping ([`needs_no_clipping`]).
+#[inline]
+pub fn inside_clip_volume(position: Vec4) -> bool {
+    position.is_finite() && outcode(position) == 0
 }
 
 /// Clips one triangle and hands each resulting triangle (a fan over the clipped polygon, in

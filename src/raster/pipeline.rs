@@ -8,9 +8,11 @@
 
 use super::RasterError;
 use super::bin::TileGrid;
-use super::clip::{ClipVertex, clip_triangle, needs_no_clipping};
+use super::clip::{ClipVertex, clip_triangle, inside_clip_volume};
 use super::framebuffer::{Framebuffer, TileTarget};
-use super::setup::{CullMode, SetupTriangle, setup_triangle_order};
+use super::setup::{
+    CullMode, ScreenVertex, SetupTriangle, setup_screen_triangle, setup_triangle_order,
+};
 use super::tile::{
     Fragment, HeldPixels, PerFragment, QuadShader, RasterStats, finish_tile, rasterize_triangle,
 };
@@ -310,6 +312,18 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             vertices.par_iter().with_min_len(256).map(&vertex).collect();
         let grid = self.grid();
         let (width, height) = (grid.width, grid.height);
+        // Each vertex snapped once, and whether it is inside the clip volume: a triangle of
+        // three inside is set up from these alone, without copying its vertices.
+        let screen: Vec<(ScreenVertex, bool)> = shaded
+            .par_iter()
+            .with_min_len(256)
+            .map(|v| {
+                (
+                    ScreenVertex::new(v.position, width, height),
+                    inside_clip_volume(v.position),
+                )
+            })
+            .collect();
         let tasks = SETUP_TASKS.min(TASK_TILE_LISTS / grid.tile_count()).max(1);
         let chunk_len = triangles.len().div_ceil(tasks).max(MIN_SETUP_CHUNK);
         let chunks: Vec<SetUpChunk<V>> = triangles
@@ -332,15 +346,17 @@ impl<'fb, 'a> Frame<'fb, 'a> {
                     set_up.corners.push(corners);
                 };
                 for &indices in chunk {
-                    let clip = indices.map(|i| shaded[i as usize]);
-                    if needs_no_clipping(&clip) {
+                    let on_screen = indices.map(|i| screen[i as usize]);
+                    if on_screen.iter().all(|&(_, inside)| inside) {
+                        let corners = on_screen.map(|(vertex, _)| vertex);
                         if let Some((tri, order)) =
-                            setup_triangle_order(&clip, width, height, state.cull)
+                            setup_screen_triangle(&corners, width, height, state.cull)
                         {
                             keep(&mut set_up, tri, order.map(|k| indices[k]));
                         }
                         continue;
                     }
+                    let clip = indices.map(|i| shaded[i as usize]);
                     clip_triangle(clip, |clipped| {
                         if let Some((tri, order)) =
                             setup_triangle_order(&clipped, width, height, state.cull)

@@ -194,12 +194,46 @@ pub fn setup_triangle_order<V: Varyings>(
     height: u32,
     cull: CullMode,
 ) -> Option<(SetupTriangle, [usize; 3])> {
+    let screen = triangle.map(|v| ScreenVertex::new(v.position, width, height));
+    setup_screen_triangle(&screen, width, height, cull)
+}
+
+/// What the set-up reads of one vertex, computed once per vertex of a draw rather than once
+/// per triangle that uses it (a mesh vertex is shared by about six).
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenVertex {
+    /// [`snap`] of the position: meaningful only when `in_band`.
+    snapped: (Subpixel, f32, f32),
+    /// [`within_guard_band`] of the position.
+    in_band: bool,
+}
+
+impl ScreenVertex {
+    /// The vertex at clip-space `position` on a `width` × `height` target.
+    #[inline]
+    pub fn new(position: glam::Vec4, width: u32, height: u32) -> Self {
+        ScreenVertex {
+            snapped: snap(position, width, height),
+            in_band: within_guard_band(position),
+        }
+    }
+}
+
+/// [`setup_triangle_order`] of a triangle whose vertices are already [`ScreenVertex`]es: the
+/// same result.
+#[inline]
+pub fn setup_screen_triangle(
+    triangle: &[ScreenVertex; 3],
+    width: u32,
+    height: u32,
+    cull: CullMode,
+) -> Option<(SetupTriangle, [usize; 3])> {
     // Setup's overflow bound holds for clipped triangles; anything else (a caller that did not
     // clip) is refused rather than allowed to overflow the fixed-point arithmetic.
-    if !triangle.iter().all(|v| within_guard_band(v.position)) {
+    if !triangle.iter().all(|v| v.in_band) {
         return None;
     }
-    let snapped = triangle.map(|v| snap(v.position, width, height));
+    let snapped = triangle.map(|v| v.snapped);
     let [p0, p1, p2] = snapped.map(|s| s.0);
     let area = (p1.x - p0.x) * (p2.y - p0.y) - (p1.y - p0.y) * (p2.x - p0.x);
     if area == 0 {
