@@ -622,6 +622,43 @@ impl TrilinearPair<'_> {
     }
 }
 
+/// The last [`TrilinearPair`] of a run of quads: consecutive quads mostly read the same two
+/// mip levels, so [`Sampler::trilinear_pair_in_run`] reuses the levels and the addressing and
+/// only the blend fraction is new.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TrilinearPairRun<'a> {
+    /// The textures, sampler and lower level index of `pair`.
+    last: Option<(&'a Texture, &'a Texture, Sampler, usize, TrilinearPair<'a>)>,
+}
+
+impl Sampler {
+    /// [`Sampler::trilinear_pair`]: the same value, taken from `run` when its last pair read
+    /// the same textures with this sampler at the same mip levels.
+    #[inline(always)]
+    pub fn trilinear_pair_in_run<'a>(
+        &self,
+        run: &mut TrilinearPairRun<'a>,
+        first: &'a Texture,
+        second: &'a Texture,
+        lod: f32,
+    ) -> Option<TrilinearPair<'a>> {
+        let (k, k1, frac) = first.trilinear_indices(lod);
+        if let Some((held_first, held_second, sampler, held_k, pair)) = &run.last
+            && *held_k == k
+            && std::ptr::eq(*held_first, first)
+            && std::ptr::eq(*held_second, second)
+            && sampler == self
+        {
+            let mut pair = *pair;
+            pair.first.blend = (frac != 0.0 && k1 != k).then_some(frac);
+            return Some(pair);
+        }
+        let pair = self.trilinear_pair(first, second, lod)?;
+        run.last = Some((first, second, *self, k, pair));
+        Some(pair)
+    }
+}
+
 /// Nearest reads of one mip level four at a time, from [`Sampler::nearest_lookup`].
 #[derive(Clone, Copy, Debug)]
 pub struct NearestLookup<'a> {
@@ -687,6 +724,82 @@ mod tests {
             })
             .collect();
         Texture::from_rgba8(size, size, texels).expect("texture")
+    }
+
+    /// A run reuses the last pair only for the same textures, sampler and levels: a sequence
+    /// that changes each of them, with fractions changing within one level, samples as the
+    /// pair taken afresh.
+    #[test]
+    fn a_pair_taken_from_a_run_is_the_pair_taken_afresh() {
+        let ramp = |size: u32, seed: u32| {
+            let texels = (0..size * size)
+                .map(|i| {
+                    std::array::from_fn(|c| (i.wrapping_mul(40_503) >> (c as u32 + seed)) as u8)
+                })
+                .collect();
+            Texture::from_rgba8(size, size, texels).expect("texture")
+        };
+        let textures = [
+            ramp(16, 0),
+            ramp(16, 5),
+            ramp(8, 2),
+            ramp(8, 7),
+            ramp(16, 3),
+        ];
+        let samplers = [
+            Sampler::default(),
+            Sampler {
+                address_u: AddressMode::Clamp,
+                ..Sampler::default()
+            },
+        ];
+        let lods = [
+            0.0,
+            0.3,
+            0.9,
+            1.0,
+            1.2,
+            1.2,
+            2.5,
+            f32::NAN,
+            -3.0,
+            9.0,
+            3.99,
+            0.3,
+        ];
+        let mut run = TrilinearPairRun::default();
+        let bits = |v: Vec4| v.to_array().map(f32::to_bits);
+        let mut reused = 0;
+        for step in 0..400usize {
+            let (first, second) = match step / 7 % 4 {
+                0 => (&textures[0], &textures[1]),
+                1 => (&textures[0], &textures[4]),
+                2 => (&textures[1], &textures[4]),
+                _ => (&textures[2], &textures[3]),
+            };
+            let s = samplers[step / 50 % 2];
+            let lod = lods[step % lods.len()] + (step / lods.len()) as f32 * 0.01;
+            let held = run
+                .last
+                .map(|(a, b, held, k, _)| (a as *const _, b as *const _, held, k));
+            let from_run = s
+                .trilinear_pair_in_run(&mut run, first, second, lod)
+                .expect("pair");
+            let afresh = s.trilinear_pair(first, second, lod).expect("pair");
+            let k = first.trilinear_indices(lod).0;
+            reused += usize::from(held == Some((first as *const _, second as *const _, s, k)));
+            for i in 0..12 {
+                let uv = Vec2::new(i as f32 * 0.137 - 0.3, 1.1 - i as f32 * 0.093);
+                let (a, b) = from_run.sample(uv);
+                let (c, d) = afresh.sample(uv);
+                assert_eq!(
+                    (bits(a), bits(b)),
+                    (bits(c), bits(d)),
+                    "step {step}, lod {lod}"
+                );
+            }
+        }
+        assert!(reused > 100, "the run was reused {reused} times");
     }
 
     #[test]

@@ -21,7 +21,7 @@
 //! with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::{MipLevel, TrilinearPair, level_of_detail};
+use crate::raster::texture::{MipLevel, TrilinearPair, TrilinearPairRun, level_of_detail};
 use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
     AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
@@ -578,7 +578,7 @@ pub fn shade_fur(
     let (ddx, ddy) = f.derivatives(|v| v.surface.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let v = f.varyings();
-    let reads = LevelReads::new(textures, lod);
+    let reads = LevelReads::new(textures, lod, &mut TrilinearPairRun::default());
     let unit_normal = v.surface.normal.normalize_or_zero();
     match surface(&v.surface, unit_normal, &reads, textures, maps, layer, p) {
         Surface::Discarded => None,
@@ -645,7 +645,7 @@ pub fn shade_fur_quad<'a>(
         Vec2::difference(&uv(2), &origin),
     );
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
-    let reads = LevelReads::new(textures, lod);
+    let reads = LevelReads::new(textures, lod, &mut batch.pair_run);
     let lanes = slots.lanes();
     let mut read = [bytemuck::Zeroable::zeroed(); 4];
     let (mut normals, mut objects) = (Vec3x4::default(), Vec3x4::default());
@@ -742,6 +742,8 @@ pub const LIT_LANES: usize = 8;
 /// each lane, and a lane's result depends on nothing else in the batch.
 #[derive(Default)]
 pub struct LitBatch<'a> {
+    /// Not lanes: the mip levels of the last quad's texture reads, kept for the next quad.
+    pair_run: TrilinearPairRun<'a>,
     len: usize,
     /// The mip level the shadow's lookups of the lanes held read.
     shadow_level: Option<&'a MipLevel>,
@@ -1075,12 +1077,13 @@ struct LevelReads<'a> {
 }
 
 impl<'a> LevelReads<'a> {
+    /// The reads at `lod`; `run` keeps the levels of the last quad for the next.
     #[inline(always)]
-    fn new(textures: LayerMaps<'a>, lod: f32) -> Self {
+    fn new(textures: LayerMaps<'a>, lod: f32, run: &mut TrilinearPairRun<'a>) -> Self {
         let sampler = textures.sampler;
         LevelReads {
             lod,
-            surface: sampler.trilinear_pair(textures.colour, textures.tangent, lod),
+            surface: sampler.trilinear_pair_in_run(run, textures.colour, textures.tangent, lod),
         }
     }
 }
