@@ -63,6 +63,13 @@ enum Command {
 /// Exit status of an internal error (a panic: a bug in pelage, never bad input).
 const EXIT_BUG: u8 = 101;
 
+/// The pipeline allocates its set-up buffers per draw (tens of MB a frame) and frees them at
+/// each flush; glibc's allocator handed that memory back to the kernel and faulted it in again,
+/// draw after draw (5.7 % of a frame's CPU time in the kernel on the 100,000-triangle torus).
+/// mimalloc keeps it for the next draw (docs/performance.md, "Memory kept between draws").
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     // Last line of defence: a panic prints one line, no backtrace, and exits 101. Bad input
     // never gets here; it is answered with its own message and exit status 2.
