@@ -14,7 +14,8 @@ use super::setup::{
     CullMode, ScreenVertex, SetupTriangle, setup_screen_triangle, setup_triangle_order,
 };
 use super::tile::{
-    Fragment, HeldPixels, PerFragment, QuadShader, RasterStats, finish_tile, rasterize_triangle,
+    Fragment, HeldPixels, PerFragment, QuadShader, RasterStats, finish_tile,
+    holds_across_triangles, rasterize_triangle,
 };
 use super::varyings::Varyings;
 use crate::simd::{self, Kernel, SimdLevel};
@@ -184,7 +185,8 @@ where
             stats,
         } = self;
         let mut deferred = S::Deferred::default();
-        let mut held = HeldPixels::new(target.rect);
+        let holds = holds_across_triangles::<V, S>(draw.state.depth_write);
+        let mut held = HeldPixels::new(target.rect, holds);
         for chunk in &draw.chunks {
             for &t in &chunk.bins[tile] {
                 let t = t as usize;

@@ -37,6 +37,16 @@ enum LaneSource<'q, V> {
 }
 
 impl<'q, V: Varyings> LaneSource<'q, V> {
+    /// Coarse derivatives of `f` (lane 1 − lane 0, lane 2 − lane 0).
+    #[inline]
+    fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
+        let origin = f(&self.lane(0));
+        (
+            T::difference(&f(&self.lane(1)), &origin),
+            T::difference(&f(&self.lane(2)), &origin),
+        )
+    }
+
     #[inline(always)]
     fn lane(&self, lane: usize) -> V {
         match self {
@@ -93,11 +103,7 @@ impl<'q, V: Varyings> Fragment<'q, V> {
     /// Coarse screen-space derivatives `(d/dx, d/dy)` of any function of the varyings.
     #[inline]
     pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
-        let origin = f(&self.lanes.lane(0));
-        (
-            T::difference(&f(&self.lanes.lane(1)), &origin),
-            T::difference(&f(&self.lanes.lane(2)), &origin),
-        )
+        self.lanes.derivatives(f)
     }
 }
 
@@ -176,11 +182,7 @@ impl<'q, V: Varyings> Quad<'q, V> {
     /// Coarse screen-space derivatives, the same for every lane (see [`Fragment::derivatives`]).
     #[inline]
     pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
-        let origin = f(&self.lanes.lane(0));
-        (
-            T::difference(&f(&self.lanes.lane(1)), &origin),
-            T::difference(&f(&self.lanes.lane(2)), &origin),
-        )
+        self.lanes.derivatives(f)
     }
 }
 
@@ -335,9 +337,24 @@ pub(crate) struct HeldPixels {
     row_words: usize,
 }
 
+/// Whether a shader may hold lanes past a triangle: its [`QuadShader::Deferred`] can hold
+/// anything and the draw does not write depth. Otherwise the rasterizer asks for the lanes at
+/// the end of each triangle and keeps no [`HeldPixels`].
+#[inline(always)]
+pub(crate) fn holds_across_triangles<V, S: QuadShader<V>>(writes_depth: bool) -> bool {
+    size_of::<S::Deferred>() != 0 && !writes_depth
+}
+
 impl HeldPixels {
-    /// None held, for a tile of `rect`'s size.
-    pub(crate) fn new(rect: PixelRect) -> Self {
+    /// None held, for a tile of `rect`'s size (no room at all for a draw whose shader does
+    /// not hold lanes across triangles).
+    pub(crate) fn new(rect: PixelRect, holds: bool) -> Self {
+        if !holds {
+            return HeldPixels {
+                words: Vec::new(),
+                row_words: 0,
+            };
+        }
         let row_words = (rect.x1 - rect.x0 + 1).div_ceil(64) as usize;
         // One row more: the lower lanes of a quad on a last, odd row (masked off) still index.
         let rows = (rect.y1 - rect.y0 + 1) as usize;
@@ -483,12 +500,13 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
     let x_start = r.x0 & !1;
     let (mut shaded, mut written) = (0u64, 0u64);
-    // Without depth writes the shader may hold lanes past this triangle (`HeldPixels`).
     let writes_depth = match WRITE {
         NO => false,
         YES => true,
         _ => state.depth_write,
     };
+    // Without depth writes the shader may hold lanes past this triangle (`HeldPixels`).
+    let tracks = holds_across_triangles::<V, S>(writes_depth);
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
@@ -584,7 +602,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 depth: z,
                 open: passed,
             };
-            if !writes_depth {
+            if tracks {
                 let (column, row) = (qx - tile.x0, qy - tile.y0);
                 if held.any(column, row, passed) {
                     shader.finish(deferred, |slot, colour| {
@@ -602,7 +620,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
             qx += 2;
         }
     }
-    if writes_depth {
+    if !tracks {
         shader.finish(deferred, |slot, colour| {
             written += 1;
             write_slot::<BLEND, WRITE>(state, target, slot, colour);
