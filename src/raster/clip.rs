@@ -60,15 +60,9 @@ fn outcode(p: Vec4) -> u8 {
     code
 }
 
-/// Whether [`clip_triangle`] emits `triangle` itself, unchanged (finite and inside every
-/// plane): the common case, whose vertices the rasterizer keeps by index.
-#[inline]
-pub fn needs_no_clipping<V: Varyings>(triangle: &[ClipVertex<V>; 3]) -> bool {
-    triangle.iter().all(|v| inside_clip_volume(v.position))
-}
-
-/// Whether a clip-space position is finite and inside every plane: a triangle of three such
-/// vertices needs no clipping ([`needs_no_clipping`]).
+/// Whether a clip-space position is finite and inside every plane: [`clip_triangle`] emits a
+/// triangle of three such vertices itself, unchanged (the common case, whose vertices the
+/// rasterizer keeps by index).
 #[inline]
 pub fn inside_clip_volume(position: Vec4) -> bool {
     position.is_finite() && outcode(position) == 0

@@ -51,9 +51,15 @@ macro_rules! glam_varyings {
 glam_varyings!(Vec2, Vec3, Vec4);
 
 impl<const N: usize> Varyings for [f32; N] {
-    #[inline]
+    /// A plain loop, which the compiler runs on packed registers (structs of `f32` fields are
+    /// interpolated through it).
+    #[inline(always)]
     fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
-        std::array::from_fn(|i| (a[i] * wa + b[i] * wb) + c[i] * wc)
+        let mut out = [0.0f32; N];
+        for i in 0..N {
+            out[i] = (a[i] * wa + b[i] * wb) + c[i] * wc;
+        }
+        out
     }
 }
 

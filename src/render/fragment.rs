@@ -104,11 +104,7 @@ macro_rules! pod_varyings {
             fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
                 const FLOATS: usize = size_of::<$t>() / size_of::<f32>();
                 let [a, b, c] = [a, b, c].map(bytemuck::cast_ref::<Self, [f32; FLOATS]>);
-                let mut out = [0.0f32; FLOATS];
-                for i in 0..FLOATS {
-                    out[i] = (a[i] * wa + b[i] * wb) + c[i] * wc;
-                }
-                bytemuck::cast(out)
+                bytemuck::cast(<[f32; FLOATS]>::weighted_sum(a, wa, b, wb, c, wc))
             }
         }
     )*};
@@ -648,12 +644,11 @@ pub fn shade_fur_quad<'a>(
     let reads = LevelReads::new(textures, lod, &mut batch.pair_run);
     let lanes = slots.lanes();
     let mut read = [bytemuck::Zeroable::zeroed(); 4];
-    let (mut normals, mut objects) = (Vec3x4::default(), Vec3x4::default());
+    let mut normals = Vec3x4::default();
     for (lane, read) in read.iter_mut().enumerate() {
         if lanes & (1 << lane) != 0 {
             *read = quad.field(lane, |v| &v.surface);
             (normals.x[lane], normals.y[lane], normals.z[lane]) = read.normal.into();
-            (objects.x[lane], objects.y[lane], objects.z[lane]) = read.object.into();
         }
     }
     // The burn lobes and the light spots need each lane's unit normal: four at once.
@@ -692,6 +687,10 @@ pub fn shade_fur_quad<'a>(
     }
     // Step 4's spots on the quad's lanes together.
     if !p.spots.is_empty() {
+        let mut objects = Vec3x4::default();
+        for (lane, read) in read.iter().enumerate() {
+            (objects.x[lane], objects.y[lane], objects.z[lane]) = read.object.into();
+        }
         let mut strands = Vec3x4::from_lanes(surfaces.map(|l| l.strand));
         for spot in &p.spots {
             let weights = spot.weights_x4(&objects, &unit_normals);
@@ -1256,6 +1255,14 @@ mod tests {
             };
             let bits = |v: &FurVaryings| bytemuck::cast::<_, [u32; FUR_VARYING_FLOATS]>(*v);
             assert_eq!(bits(&got), bits(&expected));
+            // Each part alone (what `Quad::field` interpolates) gives the same bits.
+            let parts = FurVaryings {
+                surface: SurfaceVaryings::weighted_sum(
+                    &a.surface, w[0], &b.surface, w[1], &c.surface, w[2],
+                ),
+                lit: LitVaryings::weighted_sum(&a.lit, w[0], &b.lit, w[1], &c.lit, w[2]),
+            };
+            assert_eq!(bits(&parts), bits(&expected));
         }
     }
 
