@@ -30,6 +30,7 @@ use crate::scene::{
 use crate::shading::{
     self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
     Vec3x4, Vec3x8, Vec3xN,
+    lanes::{lane_mask, select_bits},
 };
 use glam::{Vec2, Vec3, Vec4};
 
@@ -249,18 +250,22 @@ impl Spot {
 }
 
 impl Spot {
-    /// [`Spot::weight_at_unit_normal`]'s weight for the four lanes of a quad, lane by lane the
-    /// same bits: ellipsoids and light spots on packed lanes (a light spot's power is skipped
-    /// when every lane is surely outside it), stripes lane by lane.
+    /// [`Spot::weight_at_unit_normal`]'s weight for `N` lanes (a lit batch's), lane by lane the
+    /// same bits: ellipsoids and light spots as plain loops over the lanes (a light spot's power
+    /// is skipped when every lane is surely outside it), stripes lane by lane.
     #[inline(always)]
-    pub fn weights_x4(&self, object: &Vec3x4, unit_normal: &Vec3x4) -> [f32; shading::LANES] {
+    pub fn weights_lanes<const N: usize>(
+        &self,
+        object: &Vec3xN<N>,
+        unit_normal: &Vec3xN<N>,
+    ) -> [f32; N] {
         match *self {
             Spot::Ellipsoid {
                 centre,
                 radii,
                 inner,
                 ..
-            } => shading::ellipsoid_spot_intensity_x4(object, centre, radii, inner),
+            } => shading::ellipsoid_spot_intensity_lanes(object, centre, radii, inner),
             Spot::Light {
                 exponent,
                 inner_threshold,
@@ -269,14 +274,21 @@ impl Spot {
                 cosine_direction,
                 ..
             } => {
-                let cosine = unit_normal.dot(&Vec3x4::splat(cosine_direction));
-                let outside = cosine.map(|c| c < outside_below);
-                if outside.iter().all(|&o| o) {
-                    return [0.0; shading::LANES];
+                let cosine = unit_normal.dot(&Vec3xN::splat(cosine_direction));
+                let mut outside = [0u32; N];
+                for i in 0..N {
+                    outside[i] = lane_mask(cosine[i] < outside_below);
                 }
-                let lobe = shading::light_spot_lobe_x4(cosine, exponent);
-                let weight = shading::spot_gradient_x4(lobe, inner_threshold, outer_threshold);
-                std::array::from_fn(|i| if outside[i] { 0.0 } else { weight[i] })
+                if outside.iter().all(|&o| o != 0) {
+                    return [0.0; N];
+                }
+                let lobe = shading::light_spot_lobe_lanes(cosine, exponent);
+                let mut weight =
+                    shading::spot_gradient_lanes(lobe, inner_threshold, outer_threshold);
+                for i in 0..N {
+                    weight[i] = select_bits(outside[i], 0.0, weight[i]);
+                }
+                weight
             }
             Spot::LightStripe { .. } | Spot::Stripe { .. } => std::array::from_fn(|i| {
                 self.weight_at_unit_normal(object.lane(i), unit_normal.lane(i))
@@ -685,21 +697,6 @@ pub fn shade_fur_quad<'a>(
     if lit == 0 {
         return;
     }
-    // Step 4's spots on the quad's lanes together.
-    if !p.spots.is_empty() {
-        let mut objects = Vec3x4::default();
-        for (lane, read) in read.iter().enumerate() {
-            (objects.x[lane], objects.y[lane], objects.z[lane]) = read.object.into();
-        }
-        let mut strands = Vec3x4::from_lanes(surfaces.map(|l| l.strand));
-        for spot in &p.spots {
-            let weights = spot.weights_x4(&objects, &unit_normals);
-            strands = shading::apply_spot_x4(&strands, spot.colour(), weights);
-        }
-        for (lane, surface) in surfaces.iter_mut().enumerate() {
-            surface.strand = strands.lane(lane);
-        }
-    }
     // The shadow's lookups of the lanes in a batch read one level: a quad at another level
     // lights what the batch holds first, as does a quad whose lanes do not fit. (One call site
     // of the lighting per copy of the hot path keeps that copy small.)
@@ -715,15 +712,14 @@ pub fn shade_fur_quad<'a>(
         let Some(slot) = slots.take(lane) else {
             continue;
         };
-        let l = &surfaces[lane];
         batch.push(
             slot,
-            LitSurface {
-                strand: l.burn.strand_colour(l.strand),
-                ..*l
-            },
+            &surfaces[lane],
             lookups[lane],
+            &read[lane],
+            unit_normals.lane(lane),
             &quad.field(lane, |v| &v.lit),
+            p,
         );
     }
 }
@@ -754,6 +750,13 @@ pub struct LitBatch<'a> {
     shadow_uv: [Vec2; LIT_LANES],
     shadow_offset: [Vec2; LIT_LANES],
     strand: Vec3x8,
+    /// Lanes charred by the burn, each with its factor on the strand colour (after the spots).
+    charred: u32,
+    char_factor: [f32; LIT_LANES],
+    /// The object position and unit normal of each lane, which the spots read (only filled
+    /// when the frame has spots).
+    object: Vec3x8,
+    unit_normal: Vec3x8,
     encoded_tangent: Vec3x8,
     wind: Vec3x8,
     lean: Vec3x8,
@@ -779,11 +782,29 @@ impl<'a> LitBatch<'a> {
 
     /// Adds one lit lane; the caller lights the batch when it is full.
     #[inline(always)]
-    fn push(&mut self, slot: PixelSlot, lit: LitSurface, lookups: ShadowLookups, v: &LitVaryings) {
+    #[allow(clippy::too_many_arguments)] // the lane's slot, surface, varyings and the frame
+    fn push(
+        &mut self,
+        slot: PixelSlot,
+        lit: &LitSurface,
+        lookups: ShadowLookups,
+        surface: &SurfaceVaryings,
+        unit_normal: Vec3,
+        v: &LitVaryings,
+        p: &ShadeParams,
+    ) {
         let i = self.len;
         self.slots[i] = Some(slot);
         self.alpha[i] = lit.alpha;
         set_lane(&mut self.strand, i, lit.strand);
+        if let BurnOutcome::Charred { colour_factor } = lit.burn {
+            self.charred |= 1 << i;
+            self.char_factor[i] = colour_factor;
+        }
+        if !p.spots.is_empty() {
+            set_lane(&mut self.object, i, surface.object);
+            set_lane(&mut self.unit_normal, i, unit_normal);
+        }
         set_lane(&mut self.encoded_tangent, i, lit.encoded_tangent);
         (self.shadow[i], self.shadow_uv[i], self.shadow_offset[i]) = match lookups {
             ShadowLookups::Taken(shadow) => (shadow, Vec2::ZERO, Vec2::ZERO),
@@ -797,6 +818,25 @@ impl<'a> LitBatch<'a> {
         set_lane(&mut self.light, i, v.light);
         set_lane(&mut self.eye, i, v.eye);
         self.len += 1;
+    }
+
+    /// Step 4's spots, then the burn's charring, on the strand colours of the lanes held:
+    /// [`spotted_strand`] lane by lane.
+    #[inline(always)]
+    fn spot_and_char(&mut self, p: &ShadeParams) {
+        for spot in &p.spots {
+            let weights = spot.weights_lanes(&self.object, &self.unit_normal);
+            self.strand = shading::apply_spot_lanes(&self.strand, spot.colour(), weights);
+        }
+        if self.charred != 0 {
+            for i in 0..LIT_LANES {
+                let m = lane_mask(self.charred & (1 << i) != 0);
+                let f = self.char_factor[i];
+                self.strand.x[i] = select_bits(m, self.strand.x[i] * f, self.strand.x[i]);
+                self.strand.y[i] = select_bits(m, self.strand.y[i] * f, self.strand.y[i]);
+                self.strand.z[i] = select_bits(m, self.strand.z[i] * f, self.strand.z[i]);
+            }
+        }
     }
 
     /// Steps 5–7 of the lanes held, each colour written to its lane's slot; the batch is
@@ -846,7 +886,8 @@ impl<'a> LitBatch<'a> {
             self.clear();
             return;
         }
-        // Steps 5 and 7.
+        // Steps 4 (the spots and charring), 5 and 7.
+        self.spot_and_char(p);
         let lighting = shading::strand_lighting_lanes(
             &lit_tangents_lanes(&self.encoded_tangent, &self.wind, &self.lean, layer, p),
             &Vec3x8::splat(Vec3::Z),
@@ -879,6 +920,7 @@ impl<'a> LitBatch<'a> {
     fn clear(&mut self) {
         self.len = 0;
         self.pending = 0;
+        self.charred = 0;
     }
 }
 
@@ -970,7 +1012,7 @@ enum ShadowLookups {
 struct LitSurface {
     alpha: f32,
     /// The strand colour: after [`surface`], the texel's (tinted); then spots and the burn's
-    /// charring ([`spotted_strand`], [`Spot::weights_x4`]).
+    /// charring ([`spotted_strand`], [`Spot::weights_lanes`]).
     strand: Vec3,
     burn: BurnOutcome,
     shadow: f32,
@@ -1178,7 +1220,7 @@ fn surface(
 }
 
 /// Step 4's spots, then the charring by `1 − I`, on one fragment's strand colour: the scalar
-/// statement of what [`shade_fur_quad`] does with [`Spot::weights_x4`].
+/// statement of what [`shade_fur_quad`] does with [`Spot::weights_lanes`].
 #[inline(always)]
 fn spotted_strand(
     strand: Vec3,

@@ -1,9 +1,7 @@
 //! Fragments side by side, one array per vector component: the four lanes of a 2×2 quad
 //! ([`Vec3x4`]) or the eight lit lanes of a batch ([`Vec3x8`]). Operations are plain per-lane
 //! loops over the arrays, which LLVM turns into packed instructions as wide as the level's
-//! copy of the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON);
-//! the 4-lane helpers `packed`/`from_packed` give `wide::f32x4` registers for code written
-//! with them.
+//! copy of the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON).
 //!
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the
@@ -17,7 +15,6 @@
 #![allow(clippy::needless_range_loop)]
 
 use glam::Vec3;
-use wide::f32x4;
 
 /// Lanes per quad: the four fragments of a 2×2 quad.
 pub const LANES: usize = 4;
@@ -186,35 +183,12 @@ impl<const N: usize> Vec3xN<N> {
     }
 }
 
-impl Vec3x4 {
-    /// The components as packed registers.
-    #[inline(always)]
-    pub(crate) fn packed(&self) -> [f32x4; 3] {
-        [self.x, self.y, self.z].map(f32x4::new)
-    }
-
-    /// From packed components.
-    #[inline(always)]
-    pub(crate) fn from_packed([x, y, z]: [f32x4; 3]) -> Self {
-        Vec3x4 {
-            x: x.to_array(),
-            y: y.to_array(),
-            z: z.to_array(),
-        }
-    }
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
     use crate::shading::test_support::Lcg;
 
     /// Random lanes with specials mixed in: zero, −0, NaN, infinite, tiny and huge vectors.
-    pub(crate) fn lanes(rng: &mut Lcg, k: usize) -> [Vec3; LANES] {
-        lanes_n(rng, k)
-    }
-
-    /// [`lanes`] of any width.
     pub(crate) fn lanes_n<const N: usize>(rng: &mut Lcg, k: usize) -> [Vec3; N] {
         let special = [
             Vec3::ZERO,

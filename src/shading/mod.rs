@@ -124,10 +124,10 @@ pub use shadow::{
     shell_shadow_lanes, shell_shadow_x4,
 };
 pub use spots::{
-    apply_spot, apply_spot_x4, apply_spots, ellipsoid_spot_intensity, ellipsoid_spot_intensity_x4,
-    light_spot_cosine, light_spot_cosine_below, light_spot_intensity, light_spot_lobe,
-    light_spot_lobe_x4, light_stripe_band, light_stripe_intensity, spot_gradient, spot_gradient_x4,
-    stripe_intensity,
+    apply_spot, apply_spot_lanes, apply_spots, ellipsoid_spot_intensity,
+    ellipsoid_spot_intensity_lanes, light_spot_cosine, light_spot_cosine_below,
+    light_spot_intensity, light_spot_lobe, light_spot_lobe_lanes, light_stripe_band,
+    light_stripe_intensity, spot_gradient, spot_gradient_lanes, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

@@ -2,6 +2,7 @@
 //! finite value for every input, NaN and infinities included, so no shading term can leak a NaN
 //! into the framebuffer.
 
+use super::lanes::{lane_mask, select_bits};
 use wide::f32x4;
 
 /// Clamps to `[0, 1]`; NaN becomes 0.
@@ -266,17 +267,21 @@ pub(crate) fn ramp(x: f32, lo: f32, hi: f32) -> f32 {
     }
 }
 
-/// [`ramp`] of four lanes, the same bits: every branch computed, the scalar's first taken
+/// [`ramp`] of `N` lanes, the same bits: every branch computed, the scalar's first taken
 /// branch selected (`x ≥ hi` → 1, then `x ≤ lo` → 0, else the smoothstep; NaN compares false
-/// and its smoothstep saturates to +0, the scalar's 0).
+/// and its smoothstep saturates to +0, the scalar's 0). A plain loop with bit selects, so it
+/// vectorises as wide as the level's copy of the hot path allows.
 #[inline(always)]
-pub(crate) fn ramp_x4(x: f32x4, lo: f32, hi: f32) -> f32x4 {
-    let (lo, hi) = (f32x4::splat(lo), f32x4::splat(hi));
-    // `smoothstep01`: `t·t·(3 − 2t)` of the saturated ring coordinate.
-    let t = saturate_x4((x - lo) / (hi - lo));
-    let smooth = t * t * (f32x4::splat(3.0) - f32x4::splat(2.0) * t);
-    let below = x.simd_le(lo).select(f32x4::ZERO, smooth);
-    x.simd_ge(hi).select(f32x4::ONE, below)
+pub(crate) fn ramp_lanes<const N: usize>(x: [f32; N], lo: f32, hi: f32) -> [f32; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        // `smoothstep01`: `t·t·(3 − 2t)` of the saturated ring coordinate.
+        let t = saturate_select((x[i] - lo) / (hi - lo));
+        let smooth = t * t * (3.0 - 2.0 * t);
+        let below = select_bits(lane_mask(x[i] <= lo), 0.0, smooth);
+        out[i] = select_bits(lane_mask(x[i] >= hi), 1.0, below);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -608,7 +613,7 @@ mod tests {
     }
 
     #[test]
-    fn ramp_of_four_lanes_is_the_scalar_ramp_bit_for_bit() {
+    fn ramp_of_4_and_8_lanes_is_the_scalar_ramp_bit_for_bit() {
         let mut rng = crate::shading::test_support::Lcg::new(29);
         let specials = [
             f32::NAN,
@@ -627,15 +632,19 @@ mod tests {
             } else {
                 (rng.range(-1.0, 0.5), rng.range(0.5, 2.0))
             };
-            let x: [f32; 4] = std::array::from_fn(|i| {
+            let x: [f32; 8] = std::array::from_fn(|i| {
                 if (k + i) % 13 == 0 {
                     specials[(k + i) % specials.len()]
                 } else {
                     rng.range(-1.5, 2.5)
                 }
             });
-            let got = ramp_x4(f32x4::new(x), lo, hi).to_array();
-            for i in 0..4 {
+            let got = ramp_lanes(x, lo, hi);
+            let four = ramp_lanes([x[0], x[1], x[2], x[3]], lo, hi);
+            for i in 0..8 {
+                if i < 4 {
+                    assert_eq!(four[i].to_bits(), got[i].to_bits(), "4 lanes");
+                }
                 assert_eq!(
                     got[i].to_bits(),
                     ramp(x[i], lo, hi).to_bits(),

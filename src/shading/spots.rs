@@ -6,10 +6,11 @@
 //! coordinate `t` (0 at the outer edge, 1 at the inner edge), so the colour has no visible
 //! crease (Mach band) at either edge.
 
-use super::lanes::{LANES, Vec3x4};
-use super::numeric::{finite_or_zero, pow01, pow01_lanes, ramp, ramp_x4, saturate, saturate_x4};
+use super::lanes::Vec3xN;
+use super::numeric::{
+    finite_or_zero, pow01, pow01_lanes, ramp, ramp_lanes, saturate, saturate_select,
+};
 use glam::Vec3;
-use wide::f32x4;
 
 /// Geometric spot (thesis 3.2.4, "an ellipsoid function"): with the ellipsoid distance
 /// `d = sqrt(Σ((p − c)/r)²)`, the weight is 1 for `d ≤ inner`, 0 for `d ≥ 1`, and
@@ -28,52 +29,63 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
     ramp(-d, -1.0, -saturate(inner))
 }
 
-/// [`ellipsoid_spot_intensity`] of four points (the lanes of a quad), lane by lane the same
-/// bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square root on packed
-/// lanes, and [`ramp`]'s branches as selects.
+/// [`ellipsoid_spot_intensity`] of `N` points (the lanes of a quad or of a lit batch), lane by
+/// lane the same bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square
+/// root per lane, and [`ramp`]'s branches as selects ([`ramp_lanes`]).
 #[inline(always)]
-pub fn ellipsoid_spot_intensity_x4(
-    point: &Vec3x4,
+pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
+    point: &Vec3xN<N>,
     centre: Vec3,
     radii: Vec3,
     inner: f32,
-) -> [f32; LANES] {
+) -> [f32; N] {
     let r = radii.abs();
     if !(r.x > 0.0 && r.y > 0.0 && r.z > 0.0) {
-        return [0.0; LANES];
+        return [0.0; N];
     }
-    let [x, y, z] = point.packed();
-    let [cx, cy, cz, rx, ry, rz] = [centre.x, centre.y, centre.z, r.x, r.y, r.z].map(f32x4::splat);
-    let (dx, dy, dz) = ((x - cx) / rx, (y - cy) / ry, (z - cz) / rz);
-    let d = ((dx * dx + dy * dy) + dz * dz).sqrt();
-    ramp_x4(-d, -1.0, -saturate(inner)).to_array()
+    let mut minus_distance = [0.0; N];
+    for i in 0..N {
+        let dx = (point.x[i] - centre.x) / r.x;
+        let dy = (point.y[i] - centre.y) / r.y;
+        let dz = (point.z[i] - centre.z) / r.z;
+        minus_distance[i] = -((dx * dx + dy * dy) + dz * dz).sqrt();
+    }
+    ramp_lanes(minus_distance, -1.0, -saturate(inner))
 }
 
-/// [`light_spot_lobe`] of four cosines, lane by lane the same bits ([`pow01_lanes`]).
+/// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits ([`pow01_lanes`]).
 #[inline(always)]
-pub fn light_spot_lobe_x4(cosine: [f32; LANES], exponent: f32) -> [f32; LANES] {
-    pow01_lanes(cosine, [exponent; LANES])
+pub fn light_spot_lobe_lanes<const N: usize>(cosine: [f32; N], exponent: f32) -> [f32; N] {
+    pow01_lanes(cosine, [exponent; N])
 }
 
-/// [`spot_gradient`] of four intensities, lane by lane the same bits.
+/// [`spot_gradient`] of `N` intensities, lane by lane the same bits.
 #[inline(always)]
-pub fn spot_gradient_x4(
-    intensity: [f32; LANES],
+pub fn spot_gradient_lanes<const N: usize>(
+    intensity: [f32; N],
     inner_threshold: f32,
     outer_threshold: f32,
-) -> [f32; LANES] {
-    ramp_x4(f32x4::new(intensity), outer_threshold, inner_threshold).to_array()
+) -> [f32; N] {
+    ramp_lanes(intensity, outer_threshold, inner_threshold)
 }
 
-/// [`apply_spot`] on four lanes with one spot colour, lane by lane the same bits:
+/// [`apply_spot`] on `N` lanes with one spot colour, lane by lane the same bits:
 /// `fur·(1 − w) + spot·w` per component with `w = saturate(weight)`.
 #[inline(always)]
-pub fn apply_spot_x4(fur_colour: &Vec3x4, spot_colour: Vec3, weight: [f32; LANES]) -> Vec3x4 {
-    let w = saturate_x4(f32x4::new(weight));
-    let keep = f32x4::ONE - w;
-    let fur = fur_colour.packed();
-    let spot = spot_colour.to_array().map(f32x4::splat);
-    Vec3x4::from_packed(std::array::from_fn(|c| fur[c] * keep + spot[c] * w))
+pub fn apply_spot_lanes<const N: usize>(
+    fur_colour: &Vec3xN<N>,
+    spot_colour: Vec3,
+    weight: [f32; N],
+) -> Vec3xN<N> {
+    let mut out = *fur_colour;
+    for i in 0..N {
+        let w = saturate_select(weight[i]);
+        let keep = 1.0 - w;
+        out.x[i] = fur_colour.x[i] * keep + spot_colour.x * w;
+        out.y[i] = fur_colour.y[i] * keep + spot_colour.y * w;
+        out.z[i] = fur_colour.z[i] * keep + spot_colour.z * w;
+    }
+    out
 }
 
 /// Light-based spot lobe (thesis 3.2.4: "we use the specular value to add spots", the light
@@ -214,10 +226,10 @@ mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
 
-    #[test]
-    fn four_lanes_are_the_scalar_spot_terms_bit_for_bit() {
-        let mut rng = Lcg::new(52);
-        let lanes = |rng: &mut Lcg, k: usize| crate::shading::lanes::tests::lanes(rng, k);
+    /// The lane versions at 4 and 8 lanes against the scalar terms, lane by lane.
+    fn assert_lanes_are_the_scalar_spot_terms<const N: usize>(seed: u64) {
+        let mut rng = Lcg::new(seed);
+        let lanes = |rng: &mut Lcg, k: usize| crate::shading::lanes::tests::lanes_n::<N>(rng, k);
         for k in 0..5000usize {
             let points = lanes(&mut rng, k);
             let colours = lanes(&mut rng, k + 2);
@@ -229,18 +241,18 @@ mod tests {
             };
             let inner = [rng.unit(), f32::NAN, 1.0, -0.5][k % 4];
             let got =
-                ellipsoid_spot_intensity_x4(&Vec3x4::from_lanes(points), centre, radii, inner);
-            let cosine: [f32; 4] = std::array::from_fn(|_| rng.range(-1.2, 1.2));
+                ellipsoid_spot_intensity_lanes(&Vec3xN::from_lanes(points), centre, radii, inner);
+            let cosine: [f32; N] = std::array::from_fn(|_| rng.range(-1.2, 1.2));
             let exponent = [40.0, 1.0, 0.0, f32::NAN, 7.5][k % 5];
-            let lobe = light_spot_lobe_x4(cosine, exponent);
+            let lobe = light_spot_lobe_lanes(cosine, exponent);
             let (inner_t, outer_t) = [(0.7, 0.3), (0.3, 0.7), (0.5, 0.5)][k % 3];
-            let gradient = spot_gradient_x4(lobe, inner_t, outer_t);
-            let weight: [f32; 4] =
+            let gradient = spot_gradient_lanes(lobe, inner_t, outer_t);
+            let weight: [f32; N] =
                 std::array::from_fn(|i| [rng.range(-0.5, 1.5), f32::NAN, 0.0, 1.0][(k + i) % 4]);
             let spot = rng.cube();
-            let blended = apply_spot_x4(&Vec3x4::from_lanes(colours), spot, weight);
+            let blended = apply_spot_lanes(&Vec3xN::from_lanes(colours), spot, weight);
             let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-            for i in 0..4 {
+            for i in 0..N {
                 assert_eq!(
                     got[i].to_bits(),
                     ellipsoid_spot_intensity(points[i], centre, radii, inner).to_bits(),
@@ -264,6 +276,12 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn lanes_are_the_scalar_spot_terms_bit_for_bit() {
+        assert_lanes_are_the_scalar_spot_terms::<4>(52);
+        assert_lanes_are_the_scalar_spot_terms::<8>(53);
     }
 
     fn smooth64(t: f64) -> f64 {
