@@ -329,11 +329,13 @@ fn floor_small(x: f32) -> i64 {
 #[inline]
 pub fn level_of_detail(ddx: Vec2, ddy: Vec2, width: u32, height: u32) -> f32 {
     let size = Vec2::new(width as f32, height as f32);
-    let (along_x, along_y) = ((ddx * size).length(), (ddy * size).length());
-    if along_x.is_nan() || along_y.is_nan() {
+    let (squared_x, squared_y) = ((ddx * size).length_squared(), (ddy * size).length_squared());
+    if squared_x.is_nan() || squared_y.is_nan() {
         return 0.0;
     }
-    let rho = along_x.max(along_y);
+    // `max(√a, √b) = √max(a, b)`: a correctly rounded square root is monotonic, so one root
+    // (on the quad's critical path, before any texel address) gives the same ρ as two.
+    let rho = squared_x.max(squared_y).sqrt();
     if rho.is_infinite() {
         return f32::MAX;
     }
@@ -1186,6 +1188,45 @@ mod tests {
                     "{uv}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn level_of_detail_takes_one_root_with_the_bits_of_two() {
+        let two_roots = |ddx: Vec2, ddy: Vec2, w: u32, h: u32| {
+            let size = Vec2::new(w as f32, h as f32);
+            let (along_x, along_y) = ((ddx * size).length(), (ddy * size).length());
+            if along_x.is_nan() || along_y.is_nan() {
+                return 0.0;
+            }
+            let rho = along_x.max(along_y);
+            if rho.is_infinite() {
+                return f32::MAX;
+            }
+            libm::log2f(rho)
+        };
+        let specials = [0.0, -0.0, f32::NAN, f32::INFINITY, 1e-30, 3e38, 1.0 / 128.0];
+        let mut state = 0x2545_f491_u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            let bits = state;
+            if bits % 11 == 0 {
+                specials[(bits / 11) as usize % specials.len()]
+            } else {
+                f32::from_bits(0x3000_0000 + bits % 0x1400_0000)
+                    * if bits & 1 == 0 { 1.0 } else { -1.0 }
+            }
+        };
+        for k in 0..200_000u32 {
+            let (ddx, ddy) = (Vec2::new(next(), next()), Vec2::new(next(), next()));
+            let (w, h) = (1 << (k % 12), 1 << (k / 7 % 12));
+            assert_eq!(
+                level_of_detail(ddx, ddy, w, h).to_bits(),
+                two_roots(ddx, ddy, w, h).to_bits(),
+                "{ddx} {ddy} {w}×{h}"
+            );
         }
     }
 
