@@ -663,8 +663,13 @@ pub fn shade_fur_quad<'a>(
             (normals.x[lane], normals.y[lane], normals.z[lane]) = read.normal.into();
         }
     }
-    // The burn lobes and the light spots need each lane's unit normal: four at once.
-    let unit_normals = normals.normalize_or_zero();
+    // The burn lobes need each lane's unit normal: four at once, and only with a burn (the
+    // spots take theirs in the lit batch, eight at once).
+    let unit_normals = if p.burn.is_some() {
+        normals.normalize_or_zero()
+    } else {
+        Vec3x4::default()
+    };
     let mut lit = 0u32;
     let mut surfaces = [LitSurface::ZERO; 4];
     let mut lookups = [ShadowLookups::Taken(0.0); 4];
@@ -717,7 +722,6 @@ pub fn shade_fur_quad<'a>(
             &surfaces[lane],
             lookups[lane],
             &read[lane],
-            unit_normals.lane(lane),
             &quad.field(lane, |v| &v.lit),
             p,
         );
@@ -753,10 +757,10 @@ pub struct LitBatch<'a> {
     /// Lanes charred by the burn, each with its factor on the strand colour (after the spots).
     charred: u32,
     char_factor: [f32; LIT_LANES],
-    /// The object position and unit normal of each lane, which the spots read (only filled
-    /// when the frame has spots).
+    /// The object position and normal of each lane, which the spots read (only filled when
+    /// the frame has spots).
     object: Vec3x8,
-    unit_normal: Vec3x8,
+    normal: Vec3x8,
     encoded_tangent: Vec3x8,
     wind: Vec3x8,
     lean: Vec3x8,
@@ -789,7 +793,6 @@ impl<'a> LitBatch<'a> {
         lit: &LitSurface,
         lookups: ShadowLookups,
         surface: &SurfaceVaryings,
-        unit_normal: Vec3,
         v: &LitVaryings,
         p: &ShadeParams,
     ) {
@@ -803,7 +806,7 @@ impl<'a> LitBatch<'a> {
         }
         if !p.spots.is_empty() {
             set_lane(&mut self.object, i, surface.object);
-            set_lane(&mut self.unit_normal, i, unit_normal);
+            set_lane(&mut self.normal, i, surface.normal);
         }
         set_lane(&mut self.encoded_tangent, i, lit.encoded_tangent);
         (self.shadow[i], self.shadow_uv[i], self.shadow_offset[i]) = match lookups {
@@ -824,9 +827,12 @@ impl<'a> LitBatch<'a> {
     /// [`spotted_strand`] lane by lane.
     #[inline(always)]
     fn spot_and_char(&mut self, p: &ShadeParams) {
-        for spot in &p.spots {
-            let weights = spot.weights_lanes(&self.object, &self.unit_normal);
-            self.strand = shading::apply_spot_lanes(&self.strand, spot.colour(), weights);
+        if !p.spots.is_empty() {
+            let unit_normals = self.normal.normalize_or_zero();
+            for spot in &p.spots {
+                let weights = spot.weights_lanes(&self.object, &unit_normals);
+                self.strand = shading::apply_spot_lanes(&self.strand, spot.colour(), weights);
+            }
         }
         if self.charred != 0 {
             for i in 0..LIT_LANES {
@@ -1130,8 +1136,9 @@ impl<'a> LevelReads<'a> {
 }
 
 /// Steps 1–4 of the module's list for one fragment at the level of detail of `reads` but the
-/// spots and charring ([`spotted_strand`]), and where its shell shadow (step 6) looks. `unit_normal` is `v.normal.normalize_or_zero()`,
-/// which the burn lobes and the light spots share.
+/// spots and charring ([`spotted_strand`]), and where its shell shadow (step 6) looks.
+/// `unit_normal` is `v.normal.normalize_or_zero()`, which the burn lobes read (the quad stage
+/// passes zero when the frame has no burn).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the fragment, what its quad shares, and the layer's state
 fn surface(
