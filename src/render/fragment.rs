@@ -14,11 +14,11 @@
 //!
 //! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
-//! steps 1–4 lane by lane (the spots on the quad's four lanes together); then each lit lane
-//! goes into a [`LitBatch`], which takes steps 5–7 for [`LIT_LANES`] lit lanes of the
-//! triangle's quads at once ([`shading::ShadowLanes`] for step 6, lookup `k` of every lane in
-//! one batch; [`crate::shading::lanes`] for the rest). The golden tests render every scene
-//! with both.
+//! steps 1–4 lane by lane but the spots and charring; then each lit lane goes into a
+//! [`LitBatch`], which takes the spots, the charring and steps 5–7 for [`LIT_LANES`] lit lanes
+//! of the triangle's quads at once ([`shading::ShadowLanes`] for step 6, lookup `k` of every
+//! lane in one batch; [`crate::shading::lanes`] for the rest). The golden tests render every
+//! scene with both.
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::{MipLevel, TrilinearPair, TrilinearPairRun, level_of_detail};
@@ -1227,7 +1227,7 @@ fn surface(
 }
 
 /// Step 4's spots, then the charring by `1 − I`, on one fragment's strand colour: the scalar
-/// statement of what [`shade_fur_quad`] does with [`Spot::weights_lanes`].
+/// statement of what the lit batch does with [`Spot::weights_lanes`] on eight lanes.
 #[inline(always)]
 fn spotted_strand(
     strand: Vec3,
