@@ -1212,7 +1212,7 @@ mod tests {
             state ^= state >> 17;
             state ^= state << 5;
             let bits = state;
-            if bits % 11 == 0 {
+            if bits.is_multiple_of(11) {
                 specials[(bits / 11) as usize % specials.len()]
             } else {
                 f32::from_bits(0x3000_0000 + bits % 0x1400_0000)

@@ -33,6 +33,7 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
 /// lane the same bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square
 /// root per lane, and [`ramp`]'s branches as selects ([`ramp_lanes`]).
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // an indexed loop over several arrays vectorises
 pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
     point: &Vec3xN<N>,
     centre: Vec3,
@@ -72,6 +73,7 @@ pub fn spot_gradient_lanes<const N: usize>(
 /// [`apply_spot`] on `N` lanes with one spot colour, lane by lane the same bits:
 /// `fur·(1 − w) + spot·w` per component with `w = saturate(weight)`.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // an indexed loop over several arrays vectorises
 pub fn apply_spot_lanes<const N: usize>(
     fur_colour: &Vec3xN<N>,
     spot_colour: Vec3,
