@@ -51,19 +51,12 @@ macro_rules! glam_varyings {
 glam_varyings!(Vec2, Vec3, Vec4);
 
 impl<const N: usize> Varyings for [f32; N] {
-    /// Plain loops, which the compiler runs on packed registers (structs of `f32` fields are
-    /// interpolated through it): over groups of four components, so that a length such as 12
-    /// is one 8-wide and one 4-wide step rather than 8 wide and four scalar.
+    /// A plain loop, which the compiler runs on packed registers (structs of `f32` fields are
+    /// interpolated through it).
     #[inline(always)]
     fn weighted_sum(a: &Self, wa: f32, b: &Self, wb: f32, c: &Self, wc: f32) -> Self {
         let mut out = [0.0f32; N];
-        let whole = N - N % 4;
-        for group in (0..whole).step_by(4) {
-            for i in group..group + 4 {
-                out[i] = (a[i] * wa + b[i] * wb) + c[i] * wc;
-            }
-        }
-        for i in whole..N {
+        for i in 0..N {
             out[i] = (a[i] * wa + b[i] * wb) + c[i] * wc;
         }
         out
