@@ -105,7 +105,7 @@ impl Texture {
     /// the fraction from `k` towards it, `lod` clamped to the chain (NaN → 0). `lod ≥ 0` after
     /// the clamp, so truncation is the floor.
     #[inline]
-    fn trilinear_indices(&self, lod: f32) -> (usize, usize, f32) {
+    pub fn trilinear_indices(&self, lod: f32) -> (usize, usize, f32) {
         let max = (self.levels.len() - 1) as f32;
         let lod = if lod.is_nan() {
             0.0
@@ -624,6 +624,202 @@ impl TrilinearPair<'_> {
     }
 }
 
+/// The eight channels of [`TrilinearPair::sample_lanes`] for `N` lanes, one array a channel:
+/// the first texture's RGBA in 0–3, the second's in 4–7.
+pub type PairChannels<const N: usize> = [[f32; N]; 8];
+
+impl TrilinearPair<'_> {
+    /// The blend fraction `λ − ⌊λ⌋` this pair was taken at, 0 where only the lower level is
+    /// read (a zero fraction, or the last level): what [`TrilinearPair::sample_lanes`] takes
+    /// per lane.
+    #[inline(always)]
+    pub fn blend_fraction(&self) -> f32 {
+        self.first.blend.unwrap_or(0.0)
+    }
+
+    /// Whether `other` reads the same mip levels of the same textures (whatever its blend
+    /// fraction), so that lanes of both may be sampled together by
+    /// [`TrilinearPair::sample_lanes`].
+    #[inline(always)]
+    pub fn reads_levels_of(&self, other: &TrilinearPair<'_>) -> bool {
+        let same = |a: [&MipLevel; 2], b: [&MipLevel; 2]| {
+            std::ptr::eq(a[0], b[0]) && std::ptr::eq(a[1], b[1])
+        };
+        same(self.first.levels, other.first.levels)
+            && same(self.second, other.second)
+            && self.first.addressing.modes == other.first.addressing.modes
+    }
+
+    /// [`TrilinearPair::sample`] of `N` lanes (a multiple of 4), the result in
+    /// structure-of-arrays form: lane `i` samples `(u[i], v[i])` at this pair's mip levels with
+    /// its own blend fraction `frac[i]` (the `λ − ⌊λ⌋` of its quad; 0 reads the lower level
+    /// alone), and gets, channel by channel, the bits [`TrilinearPair::sample`] gives at that
+    /// fraction. The footprints (the coordinate clamp, the floor, the weights, the addressing)
+    /// are plain loops over the lanes, which LLVM packs as wide as the level's copy of the hot
+    /// path allows; each lane's texels are then converted and filtered as today's single
+    /// sample does, both textures' eight channels at once ([`BilinearFootprint::filter_pair`]).
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    #[inline(always)]
+    pub fn sample_lanes<const N: usize>(
+        &self,
+        u: &[f32; N],
+        v: &[f32; N],
+        frac: &[f32; N],
+    ) -> PairChannels<N> {
+        let [lower, upper] = self.first.levels;
+        let mut any_blend = 0u32;
+        for i in 0..N {
+            any_blend |= u32::from(frac[i] != 0.0);
+        }
+        let low = self.footprint_lanes(0, u, v);
+        let high = if any_blend != 0 {
+            self.footprint_lanes(1, u, v)
+        } else {
+            low
+        };
+        let mut out = [[0.0f32; N]; 8];
+        for i in 0..N {
+            let mut both = low.lane(i).filter_pair(lower, self.second[0]);
+            if frac[i] != 0.0 {
+                let b = high.lane(i).filter_pair(upper, self.second[1]);
+                for c in 0..8 {
+                    both[c] = both[c] + (b[c] - both[c]) * frac[i];
+                }
+            }
+            for c in 0..8 {
+                out[c][i] = both[c];
+            }
+        }
+        out
+    }
+
+    /// The bilinear footprints of `N` lanes on level `level` of the pair (0 the lower, 1 the
+    /// upper): [`TrilinearLevels::footprints`], lane by lane the same operations.
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    #[inline(always)]
+    fn footprint_lanes<const N: usize>(
+        &self,
+        level: usize,
+        u: &[f32; N],
+        v: &[f32; N],
+    ) -> FootprintLanes<N> {
+        let addressing = &self.first.addressing;
+        let (ax, ay) = (2 * level, 2 * level + 1);
+        let size = addressing.size_f32.to_array();
+        let (x, fx) = lane_footprint_axis(u, size[ax]);
+        let (y, fy) = lane_footprint_axis(v, size[ay]);
+        let (x0, x1) = addressing.address_lanes(ax, &x);
+        let (y0, y1) = addressing.address_lanes(ay, &y);
+        let row = addressing.size[ax] as i32;
+        let mut rows = ([0i32; N], [0i32; N]);
+        for i in 0..N {
+            // Within the level: the products are below its texel count.
+            rows.0[i] = y0[i] * row;
+            rows.1[i] = y1[i] * row;
+        }
+        FootprintLanes {
+            x: (x0, x1),
+            rows,
+            fx,
+            fy,
+        }
+    }
+}
+
+/// The bilinear footprints of `N` lanes on one level, one array per component: the columns
+/// and row offsets of the texels below and above each sample point, and the weights.
+#[derive(Clone, Copy)]
+struct FootprintLanes<const N: usize> {
+    x: ([i32; N], [i32; N]),
+    rows: ([i32; N], [i32; N]),
+    fx: [f32; N],
+    fy: [f32; N],
+}
+
+impl<const N: usize> FootprintLanes<N> {
+    /// Lane `i`'s footprint.
+    #[inline(always)]
+    fn lane(&self, i: usize) -> BilinearFootprint {
+        let (xa, xb) = (self.x.0[i] as usize, self.x.1[i] as usize);
+        let (ya, yb) = (self.rows.0[i] as usize, self.rows.1[i] as usize);
+        BilinearFootprint {
+            texels: [ya + xa, ya + xb, yb + xa, yb + xb],
+            fx: self.fx[i],
+            fy: self.fy[i],
+        }
+    }
+}
+
+/// One axis of the bilinear footprints of `N` lanes (a multiple of 4) on a level `size`
+/// texels wide: the texel index below the sample point (`⌊x⌋` of
+/// `x = texel_coordinate(c·size − 0.5)`, before addressing) and the weight `x − ⌊x⌋` of the
+/// one above.
+#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+#[inline(always)]
+fn lane_footprint_axis<const N: usize>(c: &[f32; N], size: f32) -> ([i32; N], [f32; N]) {
+    let mut x = [0.0f32; N];
+    for i in 0..N {
+        // `texel_coordinate_x4`, one lane.
+        let position = c[i] * size - 0.5;
+        let clamped = if position < -COORDINATE_LIMIT {
+            -COORDINATE_LIMIT
+        } else {
+            position
+        };
+        let clamped = if clamped > COORDINATE_LIMIT {
+            COORDINATE_LIMIT
+        } else {
+            clamped
+        };
+        x[i] = if position.is_finite() { clamped } else { 0.0 };
+    }
+    // The truncation four lanes at a time with `wide`'s packed conversion (|x| ≤ 2^30: exact,
+    // never out of range); Rust's saturating `as` keeps the loop scalar.
+    let mut truncated = [0i32; N];
+    for first in (0..N).step_by(4) {
+        let four = f32x4::new([x[first], x[first + 1], x[first + 2], x[first + 3]]);
+        let t = four.fast_trunc_int().to_array();
+        truncated[first..first + 4].copy_from_slice(&t);
+    }
+    let mut index = [0i32; N];
+    let mut weight = [0.0f32; N];
+    for i in 0..N {
+        // `floor_x4`: one down where the truncation rounded up.
+        let floor = truncated[i] - i32::from(truncated[i] as f32 > x[i]);
+        index[i] = floor;
+        weight[i] = x[i] - floor as f32;
+    }
+    (index, weight)
+}
+
+impl LaneAddressing {
+    /// [`address`] of the indices `index[i]` and `index[i] + 1` of `N` lanes along the axis
+    /// of footprint lane `axis`.
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    #[inline(always)]
+    fn address_lanes<const N: usize>(&self, axis: usize, index: &[i32; N]) -> ([i32; N], [i32; N]) {
+        let (mut low, mut high) = ([0i32; N], [0i32; N]);
+        match self.wrap_mask {
+            Some(mask) => {
+                let mask = mask.to_array()[axis];
+                for i in 0..N {
+                    low[i] = index[i] & mask;
+                    high[i] = (index[i] + 1) & mask;
+                }
+            }
+            None => {
+                let (size, mode) = (self.size[axis], self.modes[axis]);
+                for i in 0..N {
+                    let at = i64::from(index[i]);
+                    low[i] = address(at, size, mode) as i32;
+                    high[i] = address(at + 1, size, mode) as i32;
+                }
+            }
+        }
+        (low, high)
+    }
+}
+
 /// The last [`TrilinearPair`] of a run of quads: consecutive quads mostly read the same two
 /// mip levels, so [`Sampler::trilinear_pair_in_run`] reuses the levels and the addressing and
 /// only the blend fraction is new.
@@ -956,6 +1152,97 @@ mod tests {
         let (pa, pb) = s.sample_level_pair(&a, &small, Vec2::splat(0.3), 0.7);
         assert_eq!(pa, s.sample_level(&a, Vec2::splat(0.3), 0.7));
         assert_eq!(pb, s.sample_level(&small, Vec2::splat(0.3), 0.7));
+    }
+
+    /// `sample_lanes` on 8 and 4 lanes, each lane with its own coordinate (awkward ones among
+    /// them) and blend fraction (zero among them), gives each lane the bits of the pair taken
+    /// at its own level of detail; over wrapped and clamped, square and odd-shaped textures.
+    #[test]
+    fn pair_lanes_are_single_pair_samples() {
+        let pattern = |w: u32, h: u32, seed: u32| {
+            let texels = (0..w * h)
+                .map(|i| {
+                    std::array::from_fn(|c| {
+                        (i.wrapping_mul(2_654_435_761) >> (7 * c as u32 + seed)) as u8
+                    })
+                })
+                .collect();
+            Texture::from_rgba8(w, h, texels).expect("texture")
+        };
+        let samplers = [
+            Sampler::default(),
+            Sampler {
+                address_u: AddressMode::Clamp,
+                address_v: AddressMode::Wrap,
+                ..Sampler::default()
+            },
+        ];
+        let mut seed = 0x2545_f491u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let bits = |v: Vec4| v.to_array().map(f32::to_bits);
+        for (w, h) in [(16, 16), (12, 5), (32, 8)] {
+            let (a, b) = (pattern(w, h, 0), pattern(w, h, 3));
+            for s in &samplers {
+                for k in 0..a.level_count() {
+                    let pair = s.trilinear_pair(&a, &b, k as f32).expect("same shape");
+                    for round in 0..200u32 {
+                        let lods: [f32; 8] = std::array::from_fn(|_| {
+                            let r = next();
+                            if r % 5 == 0 {
+                                k as f32
+                            } else {
+                                k as f32 + (r >> 8) as f32 / (1u32 << 24) as f32
+                            }
+                        });
+                        let uvs: [Vec2; 8] = std::array::from_fn(|i| {
+                            if (round + i as u32).is_multiple_of(3) {
+                                awkward_coordinates(next())
+                            } else {
+                                Vec2::new(
+                                    (next() >> 8) as f32 / 1e6 - 4.0,
+                                    (next() >> 8) as f32 / 3e6 - 2.0,
+                                )
+                            }
+                        });
+                        let frac = lods.map(|lod| {
+                            let (lk, _, frac) = a.trilinear_indices(lod);
+                            assert_eq!(lk, k);
+                            frac
+                        });
+                        let (u, v) = (uvs.map(|uv| uv.x), uvs.map(|uv| uv.y));
+                        let lanes = pair.sample_lanes(&u, &v, &frac);
+                        let quad = pair.sample_lanes(
+                            &[u[0], u[1], u[2], u[3]],
+                            &[v[0], v[1], v[2], v[3]],
+                            &[frac[0], frac[1], frac[2], frac[3]],
+                        );
+                        for i in 0..8 {
+                            let single = s.trilinear_pair(&a, &b, lods[i]).expect("same shape");
+                            let (ca, cb) = single.sample(uvs[i]);
+                            let got = |c: &[[f32; 8]; 8], t: usize| {
+                                Vec4::new(
+                                    c[4 * t][i],
+                                    c[4 * t + 1][i],
+                                    c[4 * t + 2][i],
+                                    c[4 * t + 3][i],
+                                )
+                            };
+                            assert_eq!(bits(got(&lanes, 0)), bits(ca), "lane {i} at {:?}", uvs[i]);
+                            assert_eq!(bits(got(&lanes, 1)), bits(cb), "lane {i} at {:?}", uvs[i]);
+                            if i < 4 {
+                                let first: [f32; 4] = std::array::from_fn(|c| quad[c][i]);
+                                assert_eq!(first.map(f32::to_bits), bits(ca));
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// A trilinear sample written out plainly from the module's rules, scalar in each step: the

@@ -14,11 +14,12 @@
 //!
 //! Two implementations give the same bits: [`shade_fur`], one fragment at a time (the scalar
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
-//! steps 1–4 lane by lane but the spots and charring; then each lit lane goes into a
-//! [`LitBatch`], which takes the spots, the charring and steps 5–7 for [`LIT_LANES`] lit lanes
-//! of the triangle's quads at once ([`shading::ShadowLanes`] for step 6, lookup `k` of every
-//! lane in one batch; [`crate::shading::lanes`] for the rest). The golden tests render every
-//! scene with both.
+//! it finds each quad's level of detail and mip levels once and hands the quad's shaded lanes
+//! to a [`FurBatch`], which runs every step above on [`BATCH_LANES`] lanes of the tile's quads
+//! at once in structure-of-arrays form (the texture pair's footprints with
+//! [`TrilinearPair::sample_lanes`], the alpha test as a lane mask, [`shading::ShadowLanes`] for
+//! step 6, lookup `k` of every lane in one batch; [`crate::shading::lanes`] for the rest). The
+//! golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::{MipLevel, TrilinearPair, TrilinearPairRun, level_of_detail};
@@ -29,7 +30,7 @@ use crate::scene::{
 };
 use crate::shading::{
     self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
-    Vec3x4, Vec3x8, Vec3xN,
+    Vec3x8, Vec3xN,
     lanes::{lane_mask, select_bits},
 };
 use glam::{Vec2, Vec3, Vec4};
@@ -46,7 +47,7 @@ pub const ALPHA_DISCARD: f32 = shading::SHADOW_OPAQUE_ALPHA;
 /// `repr(C)` of `f32` fields only (bytemuck's `Pod` checks that there is no padding), so that
 /// interpolation can run over all components as one array.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FurVaryings {
     /// Steps 1–4 (texture reads, alpha test, burn, spots, the shadow's lookups).
     pub surface: SurfaceVaryings,
@@ -56,7 +57,7 @@ pub struct FurVaryings {
 
 /// The part of [`FurVaryings`] that every shaded fragment reads.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SurfaceVaryings {
     /// Fur texture coordinates (mesh uv × repeat).
     pub uv: Vec2,
@@ -79,7 +80,7 @@ pub struct SurfaceVaryings {
 
 /// The part of [`FurVaryings`] that only lit fragments read.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct LitVaryings {
     /// Direction towards the light, tangent space.
     pub light: Vec3,
@@ -625,10 +626,10 @@ pub fn shade_fur(
 }
 
 /// Shades the lanes of one quad ([`QuadSlots::lanes`]): lane by lane the same bits as
-/// [`shade_fur`]. Steps 1–4 run here, with the level of detail of the quad's coarse
-/// derivatives computed once and the spots on the quad's lanes together; a lane that ends
-/// there (discarded, or a debug view's colour) is written at once, and a lit lane goes into
-/// `batch`, which takes the shadow and the lighting of [`LIT_LANES`] lanes at a time.
+/// [`shade_fur`]. The quad's level of detail (its coarse derivatives) and the mip levels it
+/// picks are found here, once; its shaded lanes, interpolated whole, then join `batch`, which
+/// runs the whole stage on [`BATCH_LANES`] lanes at a time ([`FurBatch`]). Lanes of quads at
+/// other mip levels go to a fresh batch: the one held is run first.
 ///
 /// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
 /// the rasterizer's tile replay.
@@ -637,15 +638,14 @@ pub fn shade_fur(
 pub fn shade_fur_quad<'a>(
     quad: &Quad<'_, FurVaryings>,
     mut slots: QuadSlots,
-    batch: &mut LitBatch<'a>,
+    batch: &mut FurBatch<'a>,
     textures: LayerMaps<'a>,
     maps: &SurfaceMaps,
     layer: &LayerParams,
     p: &ShadeParams,
     mut write: impl FnMut(PixelSlot, Vec4),
 ) {
-    // The level of detail reads the uv of lanes 0–2 (helper lanes too); only the lanes shaded
-    // are interpolated further.
+    // The level of detail reads the uv of lanes 0–2 (helper lanes too).
     let uv = |lane: usize| quad.field(lane, |v| &v.surface.uv);
     let origin = uv(0);
     let (ddx, ddy) = (
@@ -653,280 +653,361 @@ pub fn shade_fur_quad<'a>(
         Vec2::difference(&uv(2), &origin),
     );
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
-    let reads = LevelReads::new(textures, lod, &mut batch.pair_run);
+    let (lower, upper, frac) = textures.colour.trilinear_indices(lod);
+    let shadow_level = textures.colour.nearest_level(lod);
+    // The lanes of a batch read one pair of mip levels and one shadow level: a quad at others
+    // runs what the batch holds first. (One call site of the batch's run per copy of the hot
+    // path keeps that copy small.)
     let lanes = slots.lanes();
-    let mut read = [bytemuck::Zeroable::zeroed(); 4];
-    let mut normals = Vec3x4::default();
-    for (lane, read) in read.iter_mut().enumerate() {
-        if lanes & (1 << lane) != 0 {
-            *read = quad.field(lane, |v| &v.surface);
-            (normals.x[lane], normals.y[lane], normals.z[lane]) = read.normal.into();
-        }
+    let full = batch.len + lanes.count_ones() as usize > BATCH_LANES;
+    if batch.len != 0 && (full || !batch.reads(lower, shadow_level)) {
+        batch.run(textures, maps, layer, p, &mut write);
     }
-    // The burn lobes need each lane's unit normal: four at once, and only with a burn (the
-    // spots take theirs in the lit batch, eight at once).
-    let unit_normals = if p.burn.is_some() {
-        normals.normalize_or_zero()
+    if batch.len == 0 {
+        batch.lower = lower;
+        batch.shadow_level = Some(shadow_level);
+        batch.pair = textures
+            .sampler
+            .trilinear_pair(textures.colour, textures.tangent, lod);
+    }
+    let frac = if frac != 0.0 && upper != lower {
+        frac
     } else {
-        Vec3x4::default()
+        0.0
     };
-    let mut lit = 0u32;
-    let mut surfaces = [LitSurface::ZERO; 4];
-    let mut lookups = [ShadowLookups::Taken(0.0); 4];
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
-            continue;
-        }
-        match surface(
-            &read[lane],
-            unit_normals.lane(lane),
-            &reads,
-            textures,
-            maps,
-            layer,
-            p,
-        ) {
-            Surface::Discarded => {}
-            Surface::Finished(colour) => {
-                if let Some(slot) = slots.take(lane) {
-                    write(slot, colour);
-                }
-            }
-            Surface::Lit(l, shadow) => {
-                lit |= 1 << lane;
-                surfaces[lane] = l;
-                lookups[lane] = shadow;
-            }
-        }
-    }
-    if lit == 0 {
-        return;
-    }
-    // The shadow's lookups of the lanes in a batch read one level: a quad at another level
-    // lights what the batch holds first, as does a quad whose lanes do not fit. (One call site
-    // of the lighting per copy of the hot path keeps that copy small.)
-    let shadow_level = textures.colour.nearest_level(lod);
-    if !batch.reads_level(shadow_level) || batch.len + lit.count_ones() as usize > LIT_LANES {
-        batch.light(textures.sampler, layer, p, &mut write);
-    }
-    batch.shadow_level = Some(shadow_level);
-    for lane in 0..4 {
-        if lit & (1 << lane) == 0 {
             continue;
         }
         let Some(slot) = slots.take(lane) else {
             continue;
         };
-        batch.push(
-            slot,
-            &surfaces[lane],
-            lookups[lane],
-            &read[lane],
-            &quad.field(lane, |v| &v.lit),
-            p,
-        );
+        let i = batch.len;
+        batch.slots[i] = Some(slot);
+        batch.varyings[i] = FurVaryings {
+            surface: quad.field(lane, |v| &v.surface),
+            lit: quad.field(lane, |v| &v.lit),
+        };
+        batch.lod[i] = lod;
+        batch.frac[i] = frac;
+        batch.len += 1;
     }
 }
 
-/// Lanes in a [`LitBatch`]: two quads' worth, which plain per-lane loops turn into 256-bit
+/// Lanes in a [`FurBatch`]: two quads' worth, which plain per-lane loops turn into 256-bit
 /// instructions in the AVX2 copy of the hot path.
-pub const LIT_LANES: usize = 8;
+pub const BATCH_LANES: usize = 8;
 
-/// Lit fragments of a draw's quads in one tile waiting for steps 5–7 (the shell shadow's lookups,
-/// the lit tangent, strand lighting and eq. 3.7), which run on [`LIT_LANES`] lanes at once, one
-/// array per component. Only lanes that reach the lighting are held, so a batch is full
-/// whatever the quads' coverage, and the lookups of all its lanes read one mip level.
+/// Shaded fragments of a draw's quads in one tile waiting for the whole fur stage, which runs
+/// on [`BATCH_LANES`] lanes at once in structure-of-arrays form: the texture pair's footprints,
+/// texel conversion and filter ([`TrilinearPair::sample_lanes`]), the alpha test as a lane
+/// mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
+/// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch read
+/// one pair of mip levels and one shadow level (each keeps its own blend fraction); what is
+/// rare (the burn, the painted length, density and colour maps, differently shaped maps, the
+/// debug views) runs lane by lane inside the batch with the scalar terms.
 ///
 /// Lane by lane the same bits as [`shade_fur`]: every step is the scalar twin's operations on
-/// each lane, and a lane's result depends on nothing else in the batch.
+/// each lane, and a lane's result depends on nothing else in the batch. Lanes discarded on the
+/// way run on with the others, their results dropped: the batch runs full without compaction.
 #[derive(Default)]
-pub struct LitBatch<'a> {
-    /// Not lanes: the mip levels of the last quad's texture reads, kept for the next quad.
-    pair_run: TrilinearPairRun<'a>,
+pub struct FurBatch<'a> {
     len: usize,
+    /// The lower mip level index of the lanes held.
+    lower: usize,
+    /// The mip levels the texture reads of the lanes held read (`None`: the colour and
+    /// tangent maps differ in shape, each lane is sampled alone).
+    pair: Option<TrilinearPair<'a>>,
     /// The mip level the shadow's lookups of the lanes held read.
     shadow_level: Option<&'a MipLevel>,
-    slots: [Option<PixelSlot>; LIT_LANES],
-    /// Lanes whose shadow's lookups are still to take (the others carry theirs in `shadow`).
-    pending: u32,
-    alpha: [f32; LIT_LANES],
-    shadow: [f32; LIT_LANES],
-    shadow_uv: [Vec2; LIT_LANES],
-    shadow_offset: [Vec2; LIT_LANES],
-    strand: Vec3x8,
-    /// Lanes charred by the burn, each with its factor on the strand colour (after the spots).
-    charred: u32,
-    char_factor: [f32; LIT_LANES],
-    /// The object position and normal of each lane, which the spots read (only filled when
-    /// the frame has spots).
-    object: Vec3x8,
-    normal: Vec3x8,
-    encoded_tangent: Vec3x8,
-    wind: Vec3x8,
-    lean: Vec3x8,
-    light: Vec3x8,
-    eye: Vec3x8,
+    slots: [Option<PixelSlot>; BATCH_LANES],
+    /// Each lane's varyings, interpolated whole.
+    varyings: [FurVaryings; BATCH_LANES],
+    /// Each lane's level of detail (its quad's), read where a lane is sampled alone.
+    lod: [f32; BATCH_LANES],
+    /// Each lane's blend fraction between the pair's levels.
+    frac: [f32; BATCH_LANES],
 }
 
-/// Sets lane `i` of `lanes` to `v`.
+/// The components of `N` lanes' vectors, one array each.
+#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
 #[inline(always)]
-fn set_lane(lanes: &mut Vec3x8, i: usize, v: Vec3) {
-    (lanes.x[i], lanes.y[i], lanes.z[i]) = (v.x, v.y, v.z);
+fn gather_vec3<const N: usize>(
+    lanes: &[FurVaryings; N],
+    f: impl Fn(&FurVaryings) -> Vec3,
+) -> Vec3xN<N> {
+    let mut out = Vec3xN::default();
+    for i in 0..N {
+        (out.x[i], out.y[i], out.z[i]) = f(&lanes[i]).into();
+    }
+    out
 }
 
-impl<'a> LitBatch<'a> {
-    /// Whether lanes whose lookups read `level` may join (the batch is empty or reads it).
+impl<'a> FurBatch<'a> {
+    /// Whether lanes reading mip levels `lower` and `lower + 1` and shadow level `level` may
+    /// join the lanes held (of the same draw: the same textures).
     #[inline(always)]
-    fn reads_level(&self, level: &MipLevel) -> bool {
-        self.len == 0
-            || self
+    fn reads(&self, lower: usize, level: &MipLevel) -> bool {
+        self.lower == lower
+            && self
                 .shadow_level
                 .is_some_and(|held| std::ptr::eq(held, level))
     }
 
-    /// Adds one lit lane; the caller lights the batch when it is full.
+    /// The whole fur stage of the lanes held, each colour written to its lane's slot (a
+    /// discarded lane's slot is dropped); the batch is empty after. Lanes past `len` hold what
+    /// they held before (or zeros) and run too; their results are dropped.
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)] // the lane's slot, surface, varyings and the frame
-    fn push(
+    pub fn run(
         &mut self,
-        slot: PixelSlot,
-        lit: &LitSurface,
-        lookups: ShadowLookups,
-        surface: &SurfaceVaryings,
-        v: &LitVaryings,
-        p: &ShadeParams,
-    ) {
-        let i = self.len;
-        self.slots[i] = Some(slot);
-        self.alpha[i] = lit.alpha;
-        set_lane(&mut self.strand, i, lit.strand);
-        if let BurnOutcome::Charred { colour_factor } = lit.burn {
-            self.charred |= 1 << i;
-            self.char_factor[i] = colour_factor;
-        }
-        if !p.spots.is_empty() {
-            set_lane(&mut self.object, i, surface.object);
-            set_lane(&mut self.normal, i, surface.normal);
-        }
-        set_lane(&mut self.encoded_tangent, i, lit.encoded_tangent);
-        (self.shadow[i], self.shadow_uv[i], self.shadow_offset[i]) = match lookups {
-            ShadowLookups::Taken(shadow) => (shadow, Vec2::ZERO, Vec2::ZERO),
-            ShadowLookups::Pending { uv, offset } => {
-                self.pending |= 1 << i;
-                (0.0, uv, offset)
-            }
-        };
-        set_lane(&mut self.wind, i, v.wind);
-        set_lane(&mut self.lean, i, v.lean);
-        set_lane(&mut self.light, i, v.light);
-        set_lane(&mut self.eye, i, v.eye);
-        self.len += 1;
-    }
-
-    /// Step 4's spots, then the burn's charring, on the strand colours of the lanes held:
-    /// [`spotted_strand`] lane by lane.
-    #[inline(always)]
-    fn spot_and_char(&mut self, p: &ShadeParams) {
-        if !p.spots.is_empty() {
-            let unit_normals = self.normal.normalize_or_zero();
-            for spot in &p.spots {
-                let weights = spot.weights_lanes(&self.object, &unit_normals);
-                self.strand = shading::apply_spot_lanes(&self.strand, spot.colour(), weights);
-            }
-        }
-        if self.charred != 0 {
-            for i in 0..LIT_LANES {
-                let m = lane_mask(self.charred & (1 << i) != 0);
-                let f = self.char_factor[i];
-                self.strand.x[i] = select_bits(m, self.strand.x[i] * f, self.strand.x[i]);
-                self.strand.y[i] = select_bits(m, self.strand.y[i] * f, self.strand.y[i]);
-                self.strand.z[i] = select_bits(m, self.strand.z[i] * f, self.strand.z[i]);
-            }
-        }
-    }
-
-    /// Steps 5–7 of the lanes held, each colour written to its lane's slot; the batch is
-    /// empty after. Lanes past `len` hold what they held before (or zeros) and run too; their
-    /// results are dropped.
-    #[inline(always)]
-    pub fn light(
-        &mut self,
-        sampler: Sampler,
+        textures: LayerMaps<'a>,
+        maps: &SurfaceMaps,
         layer: &LayerParams,
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
-        if self.len == 0 {
+        const N: usize = BATCH_LANES;
+        let len = self.len;
+        if len == 0 {
             return;
         }
-        // Step 6: lookup k of every lane in one batch.
-        if self.pending != 0
-            && layer.lookups > 0
-            && let Some(level) = self.shadow_level
-        {
-            let lookup = sampler.nearest_lookup(level);
-            // `shading::shell_shadow_lanes`, step by step.
-            let mut sums = shading::ShadowLanes::new(
-                self.shadow_uv,
-                self.shadow_offset,
-                layer.lookups,
-                p.shadow_texel,
-            );
-            for k in 1..=layer.lookups {
-                let (u, v) = sums.point(k);
-                sums.add(lookup.alpha_lanes(u, v));
+        self.len = 0;
+        // Lanes still alive: bit i for lane i.
+        let mut alive = (1u32 << len) - 1;
+        let lanes = &self.varyings;
+        let sampler = textures.sampler;
+        // Step 2: the texel that lands here is read at uv − wind_uv.
+        let (mut u, mut v) = ([0.0f32; N], [0.0f32; N]);
+        for i in 0..N {
+            let s = &lanes[i].surface;
+            (u[i], v[i]) = (s.uv.x - s.wind_uv.x, s.uv.y - s.wind_uv.y);
+        }
+        // Step 1: the burn (lane by lane; its charring waits for the spots).
+        let mut charred = 0u32;
+        let mut char_factor = [1.0f32; N];
+        if p.burn.is_some() {
+            let unit_normals = gather_vec3(lanes, |l| l.surface.normal).normalize_or_zero();
+            for i in 0..len {
+                match p.burn_outcome_at_unit_normal(unit_normals.lane(i), layer) {
+                    BurnOutcome::Burnt => alive &= !(1 << i),
+                    BurnOutcome::Charred { colour_factor } => {
+                        charred |= 1 << i;
+                        char_factor[i] = colour_factor;
+                    }
+                    BurnOutcome::Unburnt => {}
+                }
             }
-            for (i, shadow) in sums.shadow.into_iter().enumerate() {
-                if self.pending & (1 << i) != 0 {
-                    self.shadow[i] = shadow;
+        }
+        if textures.shell
+            && let Some(length_map) = &maps.length
+        {
+            for i in 0..len {
+                let s = &lanes[i].surface;
+                if !shading::layer_within_length(
+                    layer.height_fraction,
+                    s.length,
+                    maps.sample(length_map, s.mesh_uv).x,
+                ) {
+                    alive &= !(1 << i);
+                }
+            }
+        }
+        // Step 3: the colour and tangent maps.
+        let texels = match &self.pair {
+            Some(pair) => pair.sample_lanes(&u, &v, &self.frac),
+            None => {
+                let mut texels = [[0.0f32; N]; 8];
+                for i in 0..len {
+                    let uv = Vec2::new(u[i], v[i]);
+                    let (colour, tangent) = sampler.sample_level_pair(
+                        textures.colour,
+                        textures.tangent,
+                        uv,
+                        self.lod[i],
+                    );
+                    let both = colour.to_array().into_iter().chain(tangent.to_array());
+                    for (channel, value) in texels.iter_mut().zip(both) {
+                        channel[i] = value;
+                    }
+                }
+                texels
+            }
+        };
+        // The alpha test (NaN alpha is discarded too).
+        let mut coverage = texels[3];
+        let mut density = [0.0f32; N];
+        if let Some(density_map) = &maps.density {
+            for i in 0..len {
+                let s = &lanes[i].surface;
+                let d = maps.sample(density_map, s.mesh_uv).x;
+                density[i] = d;
+                coverage[i] = match textures.density {
+                    Some(bands) => shading::density_alpha(
+                        sampler.sample_level(bands, Vec2::new(u[i], v[i]), self.lod[i]),
+                        d,
+                    ),
+                    None => texels[3][i] * d.clamp(0.0, 1.0),
+                };
+            }
+        }
+        let mut alpha = [0.0f32; N];
+        for i in 0..N {
+            alpha[i] = coverage[i] * lanes[i].surface.fade;
+        }
+        if layer.lod_span != 1.0 {
+            for a in &mut alpha {
+                *a = shading::lod_alpha(*a, layer.lod_span);
+            }
+        }
+        let mut passed = 0u32;
+        for i in 0..N {
+            passed |= lane_mask(alpha[i] >= ALPHA_DISCARD) & (1 << i);
+        }
+        let lit = alive & passed;
+        if lit == 0 {
+            self.slots = Default::default();
+            return;
+        }
+        let mut write_lanes = |slots: &mut [Option<PixelSlot>; N],
+                               colour: &dyn Fn(usize) -> Vec4| {
+            for (i, slot) in slots.iter_mut().enumerate() {
+                if let Some(slot) = slot.take()
+                    && lit & (1 << i) != 0
+                {
+                    write(slot, colour(i));
+                }
+            }
+        };
+        match p.debug_view {
+            DebugView::Tangents => {
+                write_lanes(&mut self.slots, &|i| {
+                    Vec4::new(texels[4][i], texels[5][i], texels[6][i], alpha[i])
+                });
+                return;
+            }
+            DebugView::Alpha => {
+                write_lanes(&mut self.slots, &|i| Vec4::new(1.0, 1.0, 1.0, alpha[i]));
+                return;
+            }
+            _ => {}
+        }
+        let mut strand = Vec3xN {
+            x: texels[0],
+            y: texels[1],
+            z: texels[2],
+        };
+        if let Some(tint) = &maps.colour {
+            for i in 0..len {
+                let tinted = shading::tint_strand(
+                    strand.lane(i),
+                    maps.sample(tint, lanes[i].surface.mesh_uv).truncate(),
+                );
+                (strand.x[i], strand.y[i], strand.z[i]) = tinted.into();
+            }
+        }
+        // Step 6: the shell shadow, lookup k of every lane in one batch. Wind moves the fur
+        // above this layer further, so its displacement adds to the lookup (3.3.1).
+        let mut offset_u = [0.0f32; N];
+        let mut offset_v = [0.0f32; N];
+        for i in 0..N {
+            let s = &lanes[i].surface;
+            (offset_u[i], offset_v[i]) = (s.shadow.x + s.wind_uv.x, s.shadow.y + s.wind_uv.y);
+        }
+        let mut shadow = [0.0f32; N];
+        match (&maps.density, textures.density) {
+            (Some(_), Some(bands)) => {
+                // The density bands' lookups, one lane at a time.
+                for i in 0..len {
+                    if lit & (1 << i) == 0 {
+                        continue;
+                    }
+                    let level = bands.nearest_level(self.lod[i]);
+                    let d = density[i];
+                    shadow[i] = shading::shell_shadow(
+                        |at| shading::density_alpha(sampler.sample_nearest_in(level, at), d),
+                        Vec2::new(u[i], v[i]),
+                        Vec2::new(offset_u[i], offset_v[i]),
+                        layer.lookups,
+                        p.shadow_texel,
+                    );
+                }
+            }
+            _ => {
+                if layer.lookups > 0
+                    && let Some(level) = self.shadow_level
+                {
+                    let lookup = sampler.nearest_lookup(level);
+                    let uvs: [Vec2; N] = std::array::from_fn(|i| Vec2::new(u[i], v[i]));
+                    let offsets: [Vec2; N] =
+                        std::array::from_fn(|i| Vec2::new(offset_u[i], offset_v[i]));
+                    // `shading::shell_shadow_lanes`, step by step.
+                    let mut sums =
+                        shading::ShadowLanes::new(uvs, offsets, layer.lookups, p.shadow_texel);
+                    for k in 1..=layer.lookups {
+                        let (u, v) = sums.point(k);
+                        sums.add(lookup.alpha_lanes(u, v));
+                    }
+                    shadow = sums.shadow;
                 }
             }
         }
         if p.debug_view == DebugView::Shadow {
-            for i in 0..self.len {
-                let g = (1.0 - p.weights.shadow * self.shadow[i]).clamp(0.0, 1.0);
-                if let Some(slot) = self.slots[i].take() {
-                    write(slot, Vec4::new(g, g, g, self.alpha[i]));
-                }
-            }
-            self.clear();
+            write_lanes(&mut self.slots, &|i| {
+                let g = (1.0 - p.weights.shadow * shadow[i]).clamp(0.0, 1.0);
+                Vec4::new(g, g, g, alpha[i])
+            });
             return;
         }
-        // Steps 4 (the spots and charring), 5 and 7.
-        self.spot_and_char(p);
+        // Step 4: the spots, then the burn's charring.
+        if !p.spots.is_empty() {
+            let object = gather_vec3(lanes, |l| l.surface.object);
+            let unit_normals = gather_vec3(lanes, |l| l.surface.normal).normalize_or_zero();
+            for spot in &p.spots {
+                let weights = spot.weights_lanes(&object, &unit_normals);
+                strand = shading::apply_spot_lanes(&strand, spot.colour(), weights);
+            }
+        }
+        if charred != 0 {
+            for i in 0..N {
+                let m = lane_mask(charred & (1 << i) != 0);
+                let f = char_factor[i];
+                strand.x[i] = select_bits(m, strand.x[i] * f, strand.x[i]);
+                strand.y[i] = select_bits(m, strand.y[i] * f, strand.y[i]);
+                strand.z[i] = select_bits(m, strand.z[i] * f, strand.z[i]);
+            }
+        }
+        // Steps 5 and 7.
+        let encoded_tangent = Vec3xN {
+            x: texels[4],
+            y: texels[5],
+            z: texels[6],
+        };
+        let wind = gather_vec3(lanes, |l| l.lit.wind);
+        let lean = gather_vec3(lanes, |l| l.lit.lean);
+        let light = gather_vec3(lanes, |l| l.lit.light);
+        let eye = gather_vec3(lanes, |l| l.lit.eye);
         let lighting = shading::strand_lighting_lanes(
-            &lit_tangents_lanes(&self.encoded_tangent, &self.wind, &self.lean, layer, p),
+            &lit_tangents_lanes(&encoded_tangent, &wind, &lean, layer, p),
             &Vec3x8::splat(Vec3::Z),
-            &self.light.normalize_or_zero(),
-            &self.eye.normalize_or_zero(),
+            &light.normalize_or_zero(),
+            &eye.normalize_or_zero(),
             p.exponents,
             p.tangents,
             p.tangent_shift,
         );
         let colours = shading::final_colour_lanes(
-            &self.strand,
+            &strand,
             p.light_colour,
             p.ambient,
             lighting.diffuse,
             lighting.specular,
             shading::dampened_specular_lanes(lighting.specular_to_dampen),
-            self.shadow,
+            shadow,
             &p.weights,
             p.ambient_term,
         );
-        for i in 0..self.len {
-            if let Some(slot) = self.slots[i].take() {
-                write(slot, colours.lane(i).extend(self.alpha[i]));
-            }
-        }
-        self.clear();
-    }
-
-    #[inline(always)]
-    fn clear(&mut self) {
-        self.len = 0;
-        self.pending = 0;
-        self.charred = 0;
+        write_lanes(&mut self.slots, &|i| colours.lane(i).extend(alpha[i]));
     }
 }
 
@@ -957,12 +1038,12 @@ pub struct FurShader<'a> {
 }
 
 impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
-    type Deferred = LitBatch<'a>;
+    type Deferred = FurBatch<'a>;
 
     #[inline(always)]
     fn shade_quad(
         &self,
-        batch: &mut LitBatch<'a>,
+        batch: &mut FurBatch<'a>,
         quad: &Quad<'_, FurVaryings>,
         mut slots: QuadSlots,
         mut write: impl FnMut(PixelSlot, Vec4),
@@ -987,8 +1068,14 @@ impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     }
 
     #[inline(always)]
-    fn finish(&self, batch: &mut LitBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
-        batch.light(self.textures.sampler, &self.layer, self.params, &mut write);
+    fn finish(&self, batch: &mut FurBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
+        batch.run(
+            self.textures,
+            self.maps,
+            &self.layer,
+            self.params,
+            &mut write,
+        );
     }
 }
 
@@ -1081,15 +1168,6 @@ fn lit_tangents_lanes<const N: usize>(
 }
 
 impl LitSurface {
-    /// A lane with nothing to light.
-    const ZERO: LitSurface = LitSurface {
-        alpha: 0.0,
-        strand: Vec3::ZERO,
-        burn: BurnOutcome::Unburnt,
-        shadow: 0.0,
-        encoded_tangent: Vec3::ZERO,
-    };
-
     /// [`lit_tangent`] of this fragment with varyings `v`.
     #[inline(always)]
     fn tangent(&self, v: &LitVaryings, layer: &LayerParams, p: &ShadeParams) -> Vec3 {
