@@ -657,7 +657,7 @@ impl TrilinearPair<'_> {
     /// fraction. The footprints (the coordinate clamp, the floor, the weights, the addressing)
     /// are plain loops over the lanes, which LLVM packs as wide as the level's copy of the hot
     /// path allows; each lane's texels are then converted and filtered as today's single
-    /// sample does, both textures' eight channels at once ([`BilinearFootprint::filter_pair`]).
+    /// sample does, both textures' eight channels at once.
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn sample_lanes<const N: usize>(

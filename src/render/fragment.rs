@@ -664,11 +664,15 @@ pub fn shade_fur_quad<'a>(
         batch.run(textures, maps, layer, p, &mut write);
     }
     if batch.len == 0 {
-        batch.lower = lower;
         batch.shadow_level = Some(shadow_level);
-        batch.pair = textures
-            .sampler
-            .trilinear_pair(textures.colour, textures.tangent, lod);
+        // The pair depends on the lower level alone (the textures and sampler are the draw's):
+        // kept from batch to batch while that stays.
+        if batch.pair_lower != Some(lower) {
+            batch.pair_lower = Some(lower);
+            batch.pair = textures
+                .sampler
+                .trilinear_pair(textures.colour, textures.tangent, lod);
+        }
     }
     let frac = if frac != 0.0 && upper != lower {
         frac
@@ -713,8 +717,8 @@ pub const BATCH_LANES: usize = 8;
 #[derive(Default)]
 pub struct FurBatch<'a> {
     len: usize,
-    /// The lower mip level index of the lanes held.
-    lower: usize,
+    /// The lower mip level index of `pair` (`None` before the first quad).
+    pair_lower: Option<usize>,
     /// The mip levels the texture reads of the lanes held read (`None`: the colour and
     /// tangent maps differ in shape, each lane is sampled alone).
     pair: Option<TrilinearPair<'a>>,
@@ -748,7 +752,7 @@ impl<'a> FurBatch<'a> {
     /// join the lanes held (of the same draw: the same textures).
     #[inline(always)]
     fn reads(&self, lower: usize, level: &MipLevel) -> bool {
-        self.lower == lower
+        self.pair_lower == Some(lower)
             && self
                 .shadow_level
                 .is_some_and(|held| std::ptr::eq(held, level))
