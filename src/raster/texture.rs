@@ -757,10 +757,18 @@ impl<const N: usize> FootprintLanes<N> {
 #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
 #[inline(always)]
 fn lane_footprint_axis<const N: usize>(c: &[f32; N], size: f32) -> ([i32; N], [f32; N]) {
+    lane_axis(c, size, 0.5)
+}
+
+/// `⌊x⌋` and `x − ⌊x⌋` of `x = texel_coordinate(c·size − shift)` for `N` lanes (a multiple of
+/// 4), the steps of `texel_coordinate_x4` and `floor_x4` lane by lane.
+#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+#[inline(always)]
+fn lane_axis<const N: usize>(c: &[f32; N], size: f32, shift: f32) -> ([i32; N], [f32; N]) {
     let mut x = [0.0f32; N];
     for i in 0..N {
         // `texel_coordinate_x4`, one lane.
-        let position = c[i] * size - 0.5;
+        let position = c[i] * size - shift;
         let clamped = if position < -COORDINATE_LIMIT {
             -COORDINATE_LIMIT
         } else {
@@ -886,22 +894,21 @@ impl NearestLookup<'_> {
 }
 
 impl NearestLookup<'_> {
-    /// [`NearestLookup::alpha_x4`] of `N` points, four at a time (`N` a multiple of 4).
+    /// [`NearestLookup::alpha_x4`] of `N` points (a multiple of 4): the same values, the
+    /// coordinate clamp, the floor and the addressing as plain loops over the lanes.
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
+        // `c·size − 0` is `c·size`, bit for bit: the nearest texel has no half-texel shift.
+        let (x, _) = lane_axis(&u, self.u.size[0] as f32, 0.0);
+        let (y, _) = lane_axis(&v, self.v.size[0] as f32, 0.0);
+        let (x, _) = self.u.address_lanes(0, &x);
+        let (y, _) = self.v.address_lanes(0, &y);
+        let row = self.level.width as usize;
         let mut out = [0.0; N];
-        for first in (0..N).step_by(4) {
-            let (mut u4, mut v4) = ([0.0; 4], [0.0; 4]);
-            for i in 0..4 {
-                let lane = (first + i).min(N - 1);
-                (u4[i], v4[i]) = (u[lane], v[lane]);
-            }
-            let alphas = self.alpha_x4(u4, v4);
-            for (i, alpha) in alphas.into_iter().enumerate() {
-                if let Some(lane) = out.get_mut(first + i) {
-                    *lane = alpha;
-                }
-            }
+        for i in 0..N {
+            let texel = self.level.texels[y[i] as usize * row + x[i] as usize];
+            out[i] = UNORM8[usize::from(texel[3])];
         }
         out
     }
