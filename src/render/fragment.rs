@@ -251,7 +251,7 @@ impl Spot {
 }
 
 impl Spot {
-    /// [`Spot::weight_at_unit_normal`]'s weight for `N` lanes (a lit batch's), lane by lane the
+    /// [`Spot::weight_at_unit_normal`]'s weight for `N` lanes (a [`FurBatch`]'s), lane by lane the
     /// same bits: ellipsoids and light spots as plain loops over the lanes (a light spot's power
     /// is skipped when every lane is surely outside it), stripes lane by lane.
     #[inline(always)]
@@ -1309,7 +1309,7 @@ fn surface(
 }
 
 /// Step 4's spots, then the charring by `1 − I`, on one fragment's strand colour: the scalar
-/// statement of what the lit batch does with [`Spot::weights_lanes`] on eight lanes.
+/// statement of what a [`FurBatch`] does with [`Spot::weights_lanes`] on eight lanes.
 #[inline(always)]
 fn spotted_strand(
     strand: Vec3,

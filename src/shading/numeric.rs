@@ -124,11 +124,11 @@ pub(crate) fn pow01_diffuse_specular_dampened_lanes<const N: usize>(
         (sh[i], sl[i]) = log2_lane(xs[i]);
     }
     let (mut d, mut c, mut dampened) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    // The three exponentials in one loop: three independent chains side by side, which the
+    // core overlaps (one after the other, each waited on its own latency).
     for i in 0..N {
         d[i] = exp2_of_product_lane(xd[i], dh[i], dl[i], banks);
         c[i] = exp2_of_product_lane(xs[i], sh[i], sl[i], spec);
-    }
-    for i in 0..N {
         dampened[i] = exp2_of_product_lane(xs[i], sh[i], sl[i], damp);
     }
     (d, c, dampened)
