@@ -1166,16 +1166,7 @@ mod tests {
     /// at its own level of detail; over wrapped and clamped, square and odd-shaped textures.
     #[test]
     fn pair_lanes_are_single_pair_samples() {
-        let pattern = |w: u32, h: u32, seed: u32| {
-            let texels = (0..w * h)
-                .map(|i| {
-                    std::array::from_fn(|c| {
-                        (i.wrapping_mul(2_654_435_761) >> (7 * c as u32 + seed)) as u8
-                    })
-                })
-                .collect();
-            Texture::from_rgba8(w, h, texels).expect("texture")
-        };
+        let pattern = |w: u32, h: u32, seed: u32| hashed_texture(w, h, 7, seed);
         let samplers = [
             Sampler::default(),
             Sampler {
@@ -1279,18 +1270,22 @@ mod tests {
         a + (b - a) * frac
     }
 
+    /// A `w`×`h` texture of hashed texels: channel `c` of texel `i` is the byte of
+    /// `i·2654435761` shifted right by `shift·c + seed`.
+    fn hashed_texture(w: u32, h: u32, shift: u32, seed: u32) -> Texture {
+        let texels = (0..w * h)
+            .map(|i| {
+                std::array::from_fn(|c| {
+                    (i.wrapping_mul(2_654_435_761) >> (shift * c as u32 + seed)) as u8
+                })
+            })
+            .collect();
+        Texture::from_rgba8(w, h, texels).expect("texture")
+    }
+
     #[test]
     fn levels_chosen_once_give_the_plain_trilinear_sample() {
-        let pattern = |w: u32, h: u32, seed: u32| {
-            let texels = (0..w * h)
-                .map(|i| {
-                    std::array::from_fn(|c| {
-                        (i.wrapping_mul(2_654_435_761) >> (8 * c as u32 + seed)) as u8
-                    })
-                })
-                .collect();
-            Texture::from_rgba8(w, h, texels).expect("texture")
-        };
+        let pattern = |w: u32, h: u32, seed: u32| hashed_texture(w, h, 8, seed);
         let shapes = [(16, 16), (12, 5), (1, 8), (1, 1)];
         let modes = [AddressMode::Wrap, AddressMode::Clamp];
         let lods = [
