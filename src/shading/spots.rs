@@ -29,7 +29,7 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
     ramp(-d, -1.0, -saturate(inner))
 }
 
-/// [`ellipsoid_spot_intensity`] of `N` points (the lanes of a quad or of a lit batch), lane by
+/// [`ellipsoid_spot_intensity`] of `N` points (the lanes of a fur batch), lane by
 /// lane the same bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square
 /// root per lane, and [`ramp`]'s branches as selects ([`ramp_lanes`]).
 #[inline(always)]
