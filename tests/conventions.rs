@@ -5,21 +5,13 @@
 mod common;
 use common::scene;
 
-use pelage::render::PreparedScene;
 use pelage::scene::{
     AmbientTermSetting, Scene, ShadowTexelSetting, SpecularLobesSetting, StripeKind, StripeSettings,
 };
 
 /// The image, after checking that the scalar twin of the fragment stage gives the same bytes.
 fn render(scene: &Scene) -> Vec<u8> {
-    let prepared = PreparedScene::new(scene).expect("prepares");
-    let image = prepared.render(64).expect("renders").rgba8;
-    let twin = prepared
-        .render_scalar_twin_at(scene.time, 64)
-        .expect("renders")
-        .rgba8;
-    assert!(image == twin, "the scalar twin differs");
-    image
+    common::render_checking_twin(scene, 64, "convention")
 }
 
 /// A small torus with three specular tangents and one stripe of `kind`.

@@ -6,25 +6,13 @@
 //! from quad to quad), and odd image sizes, whose edge quads are partly outside the image.
 
 mod common;
-use common::scene;
+use common::{render_checking_twin, scene};
 
-use pelage::render::PreparedScene;
 use pelage::scene::{DebugView, Scene};
 
 /// Renders `scene` with both stages and fails where a byte differs.
 fn assert_stages_agree(scene: &Scene, what: &str) {
-    let prepared = PreparedScene::new(scene).expect("prepares");
-    let image = prepared.render(16).expect("renders").rgba8;
-    let twin = prepared
-        .render_scalar_twin_at(scene.time, 16)
-        .expect("renders")
-        .rgba8;
-    let differing = image
-        .chunks(4)
-        .zip(twin.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(differing, 0, "{what}: {differing} pixels differ");
+    let image = render_checking_twin(scene, 16, what);
     // A view that draws nothing would agree trivially.
     assert!(
         image.chunks(4).any(|p| p != &image[..4]),

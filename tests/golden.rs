@@ -18,22 +18,7 @@ fn root() -> PathBuf {
 
 /// The scene's image, after checking that the fragment stage's scalar twin gives the same bytes.
 fn render(scene: &Scene, tile: u32) -> Vec<u8> {
-    let prepared = PreparedScene::new(scene).expect("scene prepares");
-    let image = prepared.render(tile).expect("scene renders").rgba8;
-    let twin = prepared
-        .render_scalar_twin_at(scene.time, tile)
-        .expect("scene renders")
-        .rgba8;
-    let differing = image
-        .chunks(4)
-        .zip(twin.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "the scalar twin differs in {differing} pixels"
-    );
-    image
+    common::render_checking_twin(scene, tile, "golden")
 }
 
 fn write_diff(name: &str, width: u32, height: u32, expected: &[u8], actual: &[u8]) -> PathBuf {

@@ -309,12 +309,6 @@ fn floor_x4(x: f32x4) -> i32x4 {
     truncated + rounded_up
 }
 
-/// `⌊texel_coordinate(x)⌋` of four lanes.
-#[inline(always)]
-fn floor_texel_x4(x: f32x4) -> i32x4 {
-    floor_x4(texel_coordinate_x4(x))
-}
-
 /// `⌊x⌋` for `|x| ≤ 2^30`, equal to `f32::floor` there. (`f32::floor` is a library call on
 /// x86-64 without SSE4.1; truncation plus a correction is not.)
 #[inline]
@@ -451,7 +445,8 @@ impl Sampler {
     }
 
     /// What [`Sampler::alpha_nearest_in`] reads of `level` besides the coordinate, for lookups
-    /// four at a time ([`NearestLookup::alpha_x4`]); lanes that share a level choose it once.
+    /// several at a time ([`NearestLookup::alpha_lanes`]); lanes that share a level choose it
+    /// once.
     #[inline]
     pub fn nearest_lookup<'a>(&self, level: &'a MipLevel) -> NearestLookup<'a> {
         NearestLookup {
@@ -629,27 +624,6 @@ impl TrilinearPair<'_> {
 pub type PairChannels<const N: usize> = [[f32; N]; 8];
 
 impl TrilinearPair<'_> {
-    /// The blend fraction `λ − ⌊λ⌋` this pair was taken at, 0 where only the lower level is
-    /// read (a zero fraction, or the last level): what [`TrilinearPair::sample_lanes`] takes
-    /// per lane.
-    #[inline(always)]
-    pub fn blend_fraction(&self) -> f32 {
-        self.first.blend.unwrap_or(0.0)
-    }
-
-    /// Whether `other` reads the same mip levels of the same textures (whatever its blend
-    /// fraction), so that lanes of both may be sampled together by
-    /// [`TrilinearPair::sample_lanes`].
-    #[inline(always)]
-    pub fn reads_levels_of(&self, other: &TrilinearPair<'_>) -> bool {
-        let same = |a: [&MipLevel; 2], b: [&MipLevel; 2]| {
-            std::ptr::eq(a[0], b[0]) && std::ptr::eq(a[1], b[1])
-        };
-        same(self.first.levels, other.first.levels)
-            && same(self.second, other.second)
-            && self.first.addressing.modes == other.first.addressing.modes
-    }
-
     /// [`TrilinearPair::sample`] of `N` lanes (a multiple of 4), the result in
     /// structure-of-arrays form: lane `i` samples `(u[i], v[i])` at this pair's mip levels with
     /// its own blend fraction `frac[i]` (the `λ − ⌊λ⌋` of its quad; 0 reads the lower level
@@ -828,44 +802,7 @@ impl LaneAddressing {
     }
 }
 
-/// The last [`TrilinearPair`] of a run of quads: consecutive quads mostly read the same two
-/// mip levels, so [`Sampler::trilinear_pair_in_run`] reuses the levels and the addressing and
-/// only the blend fraction is new.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct TrilinearPairRun<'a> {
-    /// The textures, sampler and lower level index of `pair`.
-    last: Option<(&'a Texture, &'a Texture, Sampler, usize, TrilinearPair<'a>)>,
-}
-
-impl Sampler {
-    /// [`Sampler::trilinear_pair`]: the same value, taken from `run` when its last pair read
-    /// the same textures with this sampler at the same mip levels.
-    #[inline(always)]
-    pub fn trilinear_pair_in_run<'a>(
-        &self,
-        run: &mut TrilinearPairRun<'a>,
-        first: &'a Texture,
-        second: &'a Texture,
-        lod: f32,
-    ) -> Option<TrilinearPair<'a>> {
-        let (k, k1, frac) = first.trilinear_indices(lod);
-        if let Some((held_first, held_second, sampler, held_k, pair)) = &run.last
-            && *held_k == k
-            && std::ptr::eq(*held_first, first)
-            && std::ptr::eq(*held_second, second)
-            && sampler == self
-        {
-            let mut pair = *pair;
-            pair.first.blend = (frac != 0.0 && k1 != k).then_some(frac);
-            return Some(pair);
-        }
-        let pair = self.trilinear_pair(first, second, lod)?;
-        run.last = Some((first, second, *self, k, pair));
-        Some(pair)
-    }
-}
-
-/// Nearest reads of one mip level four at a time, from [`Sampler::nearest_lookup`].
+/// Nearest reads of one mip level several at a time, from [`Sampler::nearest_lookup`].
 #[derive(Clone, Copy, Debug)]
 pub struct NearestLookup<'a> {
     level: &'a MipLevel,
@@ -874,28 +811,9 @@ pub struct NearestLookup<'a> {
 }
 
 impl NearestLookup<'_> {
-    /// [`Sampler::alpha_nearest_in`] at four points `(u[i], v[i])`, the same four values: the
-    /// coordinates go through the clamp, the floor and the addressing as packed lanes.
-    #[inline(always)]
-    pub fn alpha_x4(&self, u: [f32; 4], v: [f32; 4]) -> [f32; 4] {
-        let x = self
-            .u
-            .address(floor_texel_x4(f32x4::new(u) * self.u.size_f32));
-        let y = self
-            .v
-            .address(floor_texel_x4(f32x4::new(v) * self.v.size_f32));
-        let (x, y) = (x.to_array(), y.to_array());
-        let row = self.level.width as usize;
-        std::array::from_fn(|i| {
-            let texel = self.level.texels[y[i] as usize * row + x[i] as usize];
-            UNORM8[usize::from(texel[3])]
-        })
-    }
-}
-
-impl NearestLookup<'_> {
-    /// [`NearestLookup::alpha_x4`] of `N` points (a multiple of 4): the same values, the
-    /// coordinate clamp, the floor and the addressing as plain loops over the lanes.
+    /// [`Sampler::alpha_nearest_in`] at `N` points `(u[i], v[i])` (`N` a multiple of 4), the
+    /// same values: the coordinate clamp, the floor and the addressing as plain loops over
+    /// the lanes.
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
@@ -929,82 +847,6 @@ mod tests {
             })
             .collect();
         Texture::from_rgba8(size, size, texels).expect("texture")
-    }
-
-    /// A run reuses the last pair only for the same textures, sampler and levels: a sequence
-    /// that changes each of them, with fractions changing within one level, samples as the
-    /// pair taken afresh.
-    #[test]
-    fn a_pair_taken_from_a_run_is_the_pair_taken_afresh() {
-        let ramp = |size: u32, seed: u32| {
-            let texels = (0..size * size)
-                .map(|i| {
-                    std::array::from_fn(|c| (i.wrapping_mul(40_503) >> (c as u32 + seed)) as u8)
-                })
-                .collect();
-            Texture::from_rgba8(size, size, texels).expect("texture")
-        };
-        let textures = [
-            ramp(16, 0),
-            ramp(16, 5),
-            ramp(8, 2),
-            ramp(8, 7),
-            ramp(16, 3),
-        ];
-        let samplers = [
-            Sampler::default(),
-            Sampler {
-                address_u: AddressMode::Clamp,
-                ..Sampler::default()
-            },
-        ];
-        let lods = [
-            0.0,
-            0.3,
-            0.9,
-            1.0,
-            1.2,
-            1.2,
-            2.5,
-            f32::NAN,
-            -3.0,
-            9.0,
-            3.99,
-            0.3,
-        ];
-        let mut run = TrilinearPairRun::default();
-        let bits = |v: Vec4| v.to_array().map(f32::to_bits);
-        let mut reused = 0;
-        for step in 0..400usize {
-            let (first, second) = match step / 7 % 4 {
-                0 => (&textures[0], &textures[1]),
-                1 => (&textures[0], &textures[4]),
-                2 => (&textures[1], &textures[4]),
-                _ => (&textures[2], &textures[3]),
-            };
-            let s = samplers[step / 50 % 2];
-            let lod = lods[step % lods.len()] + (step / lods.len()) as f32 * 0.01;
-            let held = run
-                .last
-                .map(|(a, b, held, k, _)| (a as *const _, b as *const _, held, k));
-            let from_run = s
-                .trilinear_pair_in_run(&mut run, first, second, lod)
-                .expect("pair");
-            let afresh = s.trilinear_pair(first, second, lod).expect("pair");
-            let k = first.trilinear_indices(lod).0;
-            reused += usize::from(held == Some((first as *const _, second as *const _, s, k)));
-            for i in 0..12 {
-                let uv = Vec2::new(i as f32 * 0.137 - 0.3, 1.1 - i as f32 * 0.093);
-                let (a, b) = from_run.sample(uv);
-                let (c, d) = afresh.sample(uv);
-                assert_eq!(
-                    (bits(a), bits(b)),
-                    (bits(c), bits(d)),
-                    "step {step}, lod {lod}"
-                );
-            }
-        }
-        assert!(reused > 100, "the run was reused {reused} times");
     }
 
     #[test]
@@ -1407,10 +1249,11 @@ mod tests {
                         assert_eq!(footprint.fx.to_bits(), fx.to_bits(), "{uv}");
                         assert_eq!(footprint.fy.to_bits(), fy.to_bits(), "{uv}");
                     }
-                    let points = std::array::from_fn(|i| awkward_coordinates(k * 4 + i as u32));
+                    let points: [Vec2; 4] =
+                        std::array::from_fn(|i| awkward_coordinates(k * 4 + i as u32));
                     let alphas = s
                         .nearest_lookup(a)
-                        .alpha_x4(points.map(|p| p.x), points.map(|p| p.y));
+                        .alpha_lanes(points.map(|p| p.x), points.map(|p| p.y));
                     for (alpha, point) in alphas.iter().zip(points) {
                         assert_eq!(alpha.to_bits(), s.alpha_nearest_in(a, point).to_bits());
                     }

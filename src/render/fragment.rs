@@ -22,7 +22,7 @@
 //! golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::{MipLevel, TrilinearPair, TrilinearPairRun, level_of_detail};
+use crate::raster::texture::{MipLevel, TrilinearPair, level_of_detail};
 use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
     AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
@@ -587,7 +587,7 @@ pub fn shade_fur(
     let (ddx, ddy) = f.derivatives(|v| v.surface.uv);
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let v = f.varyings();
-    let reads = LevelReads::new(textures, lod, &mut TrilinearPairRun::default());
+    let reads = LevelReads::new(textures, lod);
     let unit_normal = v.surface.normal.normalize_or_zero();
     match surface(&v.surface, unit_normal, &reads, textures, maps, layer, p) {
         Surface::Discarded => None,
@@ -1206,13 +1206,13 @@ struct LevelReads<'a> {
 }
 
 impl<'a> LevelReads<'a> {
-    /// The reads at `lod`; `run` keeps the levels of the last quad for the next.
+    /// The reads at `lod`.
     #[inline(always)]
-    fn new(textures: LayerMaps<'a>, lod: f32, run: &mut TrilinearPairRun<'a>) -> Self {
+    fn new(textures: LayerMaps<'a>, lod: f32) -> Self {
         let sampler = textures.sampler;
         LevelReads {
             lod,
-            surface: sampler.trilinear_pair_in_run(run, textures.colour, textures.tangent, lod),
+            surface: sampler.trilinear_pair(textures.colour, textures.tangent, lod),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+use pelage::render::PreparedScene;
 use pelage::scene::Scene;
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -32,4 +33,25 @@ pub fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
+}
+
+/// The scene's image at tile size `tile`, after checking that the fur fragment stage's scalar
+/// twin gives the same bytes (`what` names the render in the failure).
+pub fn render_checking_twin(scene: &Scene, tile: u32, what: &str) -> Vec<u8> {
+    let prepared = PreparedScene::new(scene).expect("scene prepares");
+    let image = prepared.render(tile).expect("scene renders").rgba8;
+    let twin = prepared
+        .render_scalar_twin_at(scene.time, tile)
+        .expect("scene renders")
+        .rgba8;
+    let differing = image
+        .chunks(4)
+        .zip(twin.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differing, 0,
+        "{what}: the scalar twin differs in {differing} pixels"
+    );
+    image
 }
