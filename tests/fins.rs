@@ -363,7 +363,7 @@ fn run_ratios(t: &FurTextures, bands: &[(f32, f32)]) -> Vec<(f32, f32, f32)> {
 
 fn level(t: &pelage::raster::texture::Texture) -> (&[[u8; 4]], usize, u32) {
     let l = t.level(0).expect("level 0");
-    (l.texels.as_slice(), l.width as usize, l.height)
+    (l.texels(), l.width() as usize, l.height())
 }
 
 fn image(i: &pelage::fur::Rgba8Image) -> (&[[u8; 4]], usize, u32) {

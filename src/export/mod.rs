@@ -158,13 +158,13 @@ impl Writer<'_> {
         let mut mips = Vec::new();
         for k in 0..texture.level_count() {
             let level = texture.level(k).expect("level in range");
-            let rgba: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            let rgba: Vec<u8> = level.texels().iter().flatten().copied().collect();
             let relative = if k == 0 {
                 format!("textures/{name}.png")
             } else {
                 format!("textures/mips/{name}_{k}.png")
             };
-            self.png(&relative, level.width, level.height, &rgba)?;
+            self.png(&relative, level.width(), level.height(), &rgba)?;
             if k > 0 {
                 mips.push(relative);
             }
@@ -230,9 +230,9 @@ pub fn export(
     ] {
         if let Some(map) = map {
             let level = map.level(0).expect("level 0");
-            let rgba: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            let rgba: Vec<u8> = level.texels().iter().flatten().copied().collect();
             let relative = format!("textures/maps/{name}.png");
-            w.png(&relative, level.width, level.height, &rgba)?;
+            w.png(&relative, level.width(), level.height(), &rgba)?;
             maps.insert(name.to_string(), json!(relative));
         }
     }

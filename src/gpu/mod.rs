@@ -915,7 +915,7 @@ impl GpuContext {
         });
         for k in 0..levels {
             let level = texture.level(k as usize).expect("level in range");
-            let bytes: Vec<u8> = level.texels.iter().flatten().copied().collect();
+            let bytes: Vec<u8> = level.texels().iter().flatten().copied().collect();
             self.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &gpu,
@@ -926,12 +926,12 @@ impl GpuContext {
                 &bytes,
                 wgpu::TexelCopyBufferLayout {
                     offset: 0,
-                    bytes_per_row: Some(level.width * 4),
-                    rows_per_image: Some(level.height),
+                    bytes_per_row: Some(level.width() * 4),
+                    rows_per_image: Some(level.height()),
                 },
                 wgpu::Extent3d {
-                    width: level.width,
-                    height: level.height,
+                    width: level.width(),
+                    height: level.height(),
                     depth_or_array_layers: 1,
                 },
             );

@@ -22,20 +22,56 @@ use glam::{Vec2, Vec4};
 use wide::{f32x4, i32x4};
 
 /// One mip level: row-major RGBA8 texels, row 0 at v = 0.
+///
+/// Invariant: `texels.len() == width × height`, both at least 1. Only [`Texture`] builds
+/// levels (its sizes checked), and the fields are private, so the hot reads may rely on it:
+/// an index made of an addressed column (`< width`) and an addressed row (`< height`) is in
+/// bounds ([`MipLevel::texel_at`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MipLevel {
-    /// Width in texels.
-    pub width: u32,
-    /// Height in texels.
-    pub height: u32,
-    /// `width × height` texels.
-    pub texels: Vec<[u8; 4]>,
+    width: u32,
+    height: u32,
+    texels: Vec<[u8; 4]>,
 }
 
 impl MipLevel {
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The `width × height` texels, row-major.
+    pub fn texels(&self) -> &[[u8; 4]] {
+        &self.texels
+    }
+
     #[inline]
     fn texel(&self, x: i64, y: i64) -> [u8; 4] {
         self.texels[(y as usize) * self.width as usize + x as usize]
+    }
+
+    /// The texel at `index = row·width + column` of an addressed column and row, without a
+    /// bounds check.
+    ///
+    /// Why unchecked: the fur stage reads 8 to 16 texels a lit fragment here, and each check
+    /// is a compare and branch on the addressing's result (docs/performance.md, "Texel reads
+    /// without bounds checks").
+    ///
+    /// # Safety
+    /// `index < width × height`: it must come from a column in `0..width` and a row in
+    /// `0..height` of this level (or of a level of the same size), as [`address`] and
+    /// [`LaneAddressing`] give them.
+    #[inline(always)]
+    unsafe fn texel_at(&self, index: usize) -> [u8; 4] {
+        debug_assert!(index < self.texels.len());
+        // SAFETY: the caller's index is in `0..width × height`, and the type's invariant makes
+        // that the length of `texels`.
+        unsafe { *self.texels.get_unchecked(index) }
     }
 }
 
@@ -65,10 +101,15 @@ impl BilinearFootprint {
     /// tangent map's), the first's channels in lanes 0–3 and the second's in 4–7: the same
     /// operations per channel, written as loops over 8 lanes so that the AVX2 copy of the hot
     /// path ([`crate::simd`]) converts and filters both texels in 256-bit registers.
+    ///
+    /// # Safety
+    /// This footprint's texel indices are of addressed rows and columns of a level the size
+    /// of `first` ([`MipLevel::texel_at`]), and `second` is that size too.
     #[inline(always)]
-    fn filter_pair(&self, first: &MipLevel, second: &MipLevel) -> [f32; 8] {
+    unsafe fn filter_pair(&self, first: &MipLevel, second: &MipLevel) -> [f32; 8] {
         let texel = |i: usize| -> [f32; 8] {
-            let (a, b) = (first.texels[i], second.texels[i]);
+            // SAFETY: the function's contract.
+            let (a, b) = unsafe { (first.texel_at(i), second.texel_at(i)) };
             let mut bytes = [0u8; 8];
             bytes[..4].copy_from_slice(&a);
             bytes[4..].copy_from_slice(&b);
@@ -608,9 +649,12 @@ impl TrilinearPair<'_> {
     pub fn sample(&self, uv: Vec2) -> (Vec4, Vec4) {
         let [fa, fb] = self.first.footprints(uv);
         let [lower, upper] = self.first.levels;
-        let mut both = fa.filter_pair(lower, self.second[0]);
+        // SAFETY: `footprints` addresses each level's rows and columns along its own size, and
+        // the second texture's levels are the first's sizes (`Sampler::trilinear_pair`).
+        let mut both = unsafe { fa.filter_pair(lower, self.second[0]) };
         if let Some(frac) = self.first.blend {
-            let b = fb.filter_pair(upper, self.second[1]);
+            // SAFETY: as for the lower level.
+            let b = unsafe { fb.filter_pair(upper, self.second[1]) };
             for c in 0..8 {
                 both[c] = both[c] + (b[c] - both[c]) * frac;
             }
@@ -653,9 +697,13 @@ impl TrilinearPair<'_> {
         };
         let mut out = [[0.0f32; N]; 8];
         for i in 0..N {
-            let mut both = low.lane(i).filter_pair(lower, self.second[0]);
+            // SAFETY: `footprint_lanes` addresses each level's rows and columns along its own
+            // size, and the second texture's levels are the first's sizes
+            // (`Sampler::trilinear_pair`).
+            let mut both = unsafe { low.lane(i).filter_pair(lower, self.second[0]) };
             if frac[i] != 0.0 {
-                let b = high.lane(i).filter_pair(upper, self.second[1]);
+                // SAFETY: as for the lower level.
+                let b = unsafe { high.lane(i).filter_pair(upper, self.second[1]) };
                 for c in 0..8 {
                     both[c] = both[c] + (b[c] - both[c]) * frac[i];
                 }
@@ -825,7 +873,9 @@ impl NearestLookup<'_> {
         let row = self.level.width as usize;
         let mut out = [0.0; N];
         for i in 0..N {
-            let texel = self.level.texels[y[i] as usize * row + x[i] as usize];
+            // SAFETY: `x[i]` and `y[i]` are addressed along this level's width and height
+            // (`address_lanes` of addressing made from its size), so the index is in bounds.
+            let texel = unsafe { self.level.texel_at(y[i] as usize * row + x[i] as usize) };
             out[i] = UNORM8[usize::from(texel[3])];
         }
         out
