@@ -532,7 +532,7 @@ fn scene_json(
             "blend_alpha": "colour = src·a + dst·(1 − a); alpha = a + dst·(1 − a)",
             "front_face": "counter-clockwise in NDC (y up)",
             "shell_sampler": { "address_u": "wrap", "address_v": "wrap", "filter": "trilinear" },
-            "level_of_detail": "λ = log2(max(|ddx(uv)·size|, |ddy(uv)·size|)) from coarse derivatives of the fur uv (before the wind offset), clamped to [0, levels − 1]",
+            "level_of_detail": "λ = ½·log2(max(|ddx(uv)·size|², |ddy(uv)·size|²)) with pelage's log2 (log2_pelage in fur.wgsl), from coarse derivatives of the fur uv (before the wind offset), clamped to [0, levels − 1]",
             "shadow_lookups": "texel ⌊uv·size⌋ of mip level ⌊λ + 0.5⌋, alpha channel",
         },
         "conventions": {

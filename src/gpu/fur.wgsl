@@ -91,10 +91,25 @@ fn saturate01(x: f32) -> f32 {
     return 0.0;
 }
 
-// high12: a float's sign, exponent and 11 high mantissa bits (numeric.rs HIGH_12_BITS): the
-// product of two such floats is exact.
-fn high12(v: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(v) & 0xfffff000u);
+// log2_pelage (numeric.rs log2_lane): pelage's own log2 of a positive x, subnormal included,
+// for the powers and the level of detail: x = 2^e·m, m in [√½, √2),
+// log2 m = c·s + (s·z)·Q(z), s = (m − 1)/(m + 1), z = s², c = 2/ln 2 rounded to f32.
+fn log2_pelage(x: f32) -> f32 {
+    var xs = x;
+    var bias = 0.0;
+    if (x < 0x1p-126f) {
+        xs = x * 0x1p23f;
+        bias = -23.0;
+    }
+    let bits = bitcast<i32>(xs);
+    let k = (bits - 0x3f3504f3) >> 23u;
+    let m = bitcast<f32>(bits - (k << 23u));
+    let e = f32(k) + bias;
+    let s = (m - 1.0) / (m + 1.0);
+    let z = s * s;
+    let q = 0.96179825 + z * (0.57675403 + z * 0.43095794);
+    let r = 2.88539 * s + (s * z) * q;
+    return e + r;
 }
 
 // pow01 (numeric.rs pow01, its scalar twin): saturate(base)^max(exponent, 0), 0^0 = 1, as
@@ -114,48 +129,15 @@ fn pow01(base: f32, exponent: f32) -> f32 {
     if (x >= 1.0) {
         return 1.0;
     }
-    // log2 x = lh + ll: x = 2^e·m, m in [√½, √2), log2 m = c·s + s³·Q(s²), s = (m − 1)/(m + 1).
-    var xs = x;
-    var bias = 0.0;
-    if (x < 0x1p-126f) {
-        xs = x * 0x1p23f;
-        bias = -23.0;
-    }
-    let bits = bitcast<i32>(xs);
-    let k = (bits - 0x3f3504f3) >> 23u;
-    let m = bitcast<f32>(bits - (k << 23u));
-    let e = f32(k) + bias;
-    let u = m - 1.0;
-    let rv = 1.0 / (m + 1.0);
-    let s = u * rv;
-    let sh = high12(s);
-    let mh = high12(m);
-    let ml = m - mh;
-    let sl = (((u - sh) - sh * mh) - sh * ml) * rv;
-    let z = s * s;
-    let q = 0.96179825 + z * (0.57675403 + z * 0.43095794);
-    let tail = (s * z) * q;
-    let rh = 2.8847656 * sh;
-    let rl = (0.0006244568 * s + 2.8847656 * sl) + tail;
-    let r = rh + rl;
-    let r_low = rl - (r - rh);
-    let lh = e + r;
-    let ll = (r - (lh - e)) + r_low;
-    // t = y·L = th + tl, th exact.
-    let yh = high12(y);
-    let yl = y - yh;
-    let lhh = high12(lh);
-    let lhl = lh - lhh;
-    let th = yh * lhh;
-    let tl = (yh * lhl + yl * lh) + y * ll;
-    let t = th + tl;
+    let t = y * log2_pelage(x);
     if (!(t >= -151.0)) {
         return 0.0;
     }
     // 2^t = 2^n·(1 + f·P(f)).
-    let n = round(max(t, -152.0));
+    let clamped = max(t, -152.0);
+    let n = round(clamped);
     var whole = i32(n);
-    let f = (th - n) + tl;
+    let f = clamped - n;
     var p = 0.00015353342;
     p = 0.0013398901 + f * p;
     p = 0.009618438 + f * p;
@@ -740,11 +722,17 @@ fn strand_colour_after_burn(b: BurnOutcome, strand_colour: vec3<f32>) -> vec3<f3
 
 // ---- texture level of detail (raster/texture.rs) -----------------------------------------
 
-// level_of_detail: log2 of the larger texel footprint of the coarse uv derivatives.
+// level_of_detail: log2 of the larger texel footprint of the coarse uv derivatives, as
+// ½·log2 of the larger squared footprint with pelage's log2 (no square root). A zero footprint
+// gives a value far below 0, which the caller clamps to level 0 as the oracle's −∞.
 fn level_of_detail(ddx: vec2<f32>, ddy: vec2<f32>, size: vec2<f32>) -> f32 {
-    let along_x = length(ddx * size);
-    let along_y = length(ddy * size);
-    return log2(max(along_x, along_y));
+    let a = ddx * size;
+    let b = ddy * size;
+    let squared = max(a.x * a.x + a.y * a.y, b.x * b.x + b.y * b.y);
+    if (squared <= 0.0) {
+        return -1.0e30;
+    }
+    return 0.5 * log2_pelage(squared);
 }
 
 // ---- the skin (render/mod.rs, first draw) -------------------------------------------------

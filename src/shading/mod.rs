@@ -78,7 +78,7 @@
 //!   distance; the burn schedule: `1e-5` relative; the dampening: exact.
 
 pub mod burn;
-mod numeric;
+pub(crate) mod numeric;
 #[cfg(test)]
 pub(crate) mod test_support;
 
