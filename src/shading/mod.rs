@@ -41,7 +41,8 @@
 //! # Numeric choices (stable: a GPU port must follow them)
 //! - Everything is `f32`. Every lobe's power of a saturated base is pelage's own `pow01`
 //!   (`2^(y·log2 x)` with documented polynomials, IEEE `+ − × ÷` and bit casts only, the same in
-//!   `fur.wgsl`; within 2 ulp for results from 1e-6 up). Other transcendentals come from `libm`
+//!   `fur.wgsl`; single precision as a GPU's `pow`, within `3·(1 + |y·log2 x|)` ulp); the
+//!   texture level of detail takes the same `log2`. Other transcendentals come from `libm`
 //!   (`powf`, `expf`, `sinf`, `tanhf`, `floorf`, `roundf`), never from `f32` methods, so results
 //!   do not depend on the platform's math library; `sqrt` is IEEE-754 correctly rounded and used
 //!   directly. No fused multiply-add is written, so the order of operations in the source is the

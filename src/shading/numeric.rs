@@ -141,8 +141,8 @@ pub(crate) fn saturate_select(x: f32) -> f32 {
 
 /// `log2 x` of a positive `x` (subnormal included), pelage's own (steps 1 and 2 of
 /// [`pow01_lanes`]): `e + (c·s + (s·z)·Q(z))` with `x = 2^e·m`, `m` in `[√½, √2)`,
-/// `s = (m − 1)/(m + 1)`, `z = s²`, `c = 2/ln 2`. Within 2 ulp of `log2 x` for `x` in
-/// `[√½, √2)`, within one ulp elsewhere (test `log2_error_against_f64`). For `x = 0` a
+/// `s = (m − 1)/(m + 1)`, `z = s²`, `c = 2/ln 2`. Within 3 ulp of `log2 x` for `x` in
+/// `[√½, √2)`, within 2 ulp elsewhere (test `log2_error_against_f64`). For `x = 0` a
 /// meaningless finite value, which [`exp2_of_product_lane`] replaces. Its branch is a select,
 /// so that loops of it over lanes vectorise.
 #[inline(always)]
