@@ -133,6 +133,91 @@ impl BilinearFootprint {
     }
 }
 
+impl BilinearFootprint {
+    /// [`BilinearFootprint::filter_pair`] from texels converted beforehand
+    /// ([`PairedTexels`]): the same operations on the same values, so the same bits, without
+    /// the per-read conversion and division.
+    ///
+    /// # Safety
+    /// This footprint's texel indices are of addressed rows and columns of a level of the
+    /// size `level` was converted from.
+    #[inline(always)]
+    unsafe fn filter_converted(&self, level: &[PairTexel]) -> [f32; 8] {
+        // SAFETY: the function's contract; `level` holds one texel per texel of its level.
+        let texel = |i: usize| unsafe { level.get_unchecked(i).0 };
+        let [i00, i10, i01, i11] = self.texels;
+        let (t00, t10, t01, t11) = (texel(i00), texel(i10), texel(i01), texel(i11));
+        let (fx, fy) = (self.fx, self.fy);
+        let mut out = [0.0f32; 8];
+        for c in 0..8 {
+            let top = t00[c] + (t10[c] - t00[c]) * fx;
+            let bottom = t01[c] + (t11[c] - t01[c]) * fx;
+            out[c] = top + (bottom - top) * fy;
+        }
+        out
+    }
+}
+
+/// One texel of [`PairedTexels`]: two RGBA8 texels as `byte/255`, aligned so that one
+/// 256-bit load reads it and no texel straddles two cache lines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+struct PairTexel([f32; 8]);
+
+/// Two textures with one mip chain shape (a layer's colour and tangent maps), converted once:
+/// texel `i` of level `k` holds the first texture's `byte/255` in lanes 0–3 and the second's
+/// in 4–7, the values [`BilinearFootprint::filter_pair`] converts on every read. 32 bytes a
+/// texel against 8, for one load instead of two loads, two widenings, two conversions and two
+/// divisions per texel read (docs/performance.md, "Texel pairs converted once").
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairedTexels {
+    /// Each level's texel count (its width × height, as in both textures) and its texels.
+    levels: Vec<Vec<PairTexel>>,
+}
+
+impl PairedTexels {
+    /// `first` and `second` side by side; `None` when their mip chains differ in shape.
+    pub fn new(first: &Texture, second: &Texture) -> Option<Self> {
+        let same_shape = first.levels.len() == second.levels.len()
+            && first
+                .levels
+                .iter()
+                .zip(&second.levels)
+                .all(|(a, b)| (a.width, a.height) == (b.width, b.height));
+        if !same_shape {
+            return None;
+        }
+        let levels = first
+            .levels
+            .iter()
+            .zip(&second.levels)
+            .map(|(a, b)| {
+                a.texels
+                    .iter()
+                    .zip(&b.texels)
+                    .map(|(x, y)| {
+                        let mut t = [0.0f32; 8];
+                        for c in 0..4 {
+                            t[c] = f32::from(x[c]) / 255.0;
+                            t[c + 4] = f32::from(y[c]) / 255.0;
+                        }
+                        PairTexel(t)
+                    })
+                    .collect()
+            })
+            .collect();
+        Some(PairedTexels { levels })
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| l.len() * size_of::<PairTexel>())
+            .sum()
+    }
+}
+
 /// An RGBA8 texture with its full mip chain.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Texture {
@@ -465,6 +550,8 @@ impl Sampler {
         Some(TrilinearPair {
             first: self.levels_at(first, indices),
             second: [&second.levels[k], &second.levels[k1]],
+            indices: [k, k1],
+            converted: None,
         })
     }
 
@@ -645,6 +732,31 @@ pub struct TrilinearPair<'a> {
     first: TrilinearLevels<'a>,
     /// The second texture's levels, the same indices as the first's.
     second: [&'a MipLevel; 2],
+    /// The indices of the two levels.
+    indices: [usize; 2],
+    /// Both textures' levels converted ([`TrilinearPair::with_converted`]), read instead of
+    /// the bytes by [`TrilinearPair::sample_lanes`].
+    converted: Option<[&'a [PairTexel]; 2]>,
+}
+
+impl<'a> TrilinearPair<'a> {
+    /// This pair reading `converted`, the same two textures converted beforehand, in
+    /// [`TrilinearPair::sample_lanes`] (the same values). Unchanged when `converted` has
+    /// another shape than this pair's textures (so it cannot be of them).
+    pub fn with_converted(mut self, converted: &'a PairedTexels) -> Self {
+        let level = |k: usize, l: &MipLevel| {
+            converted
+                .levels
+                .get(k)
+                .filter(|texels| texels.len() == l.texels.len())
+        };
+        let [k, k1] = self.indices;
+        let [lower, upper] = self.first.levels;
+        if let (Some(a), Some(b)) = (level(k, lower), level(k1, upper)) {
+            self.converted = Some([a.as_slice(), b.as_slice()]);
+        }
+        self
+    }
 }
 
 impl TrilinearPair<'_> {
@@ -700,6 +812,24 @@ impl TrilinearPair<'_> {
             low
         };
         let mut out = [[0.0f32; N]; 8];
+        if let Some([converted_lower, converted_upper]) = self.converted {
+            for i in 0..N {
+                // SAFETY: `footprint_lanes` addresses each level's rows and columns along its
+                // own size, and `with_converted` took converted levels of those texel counts.
+                let mut both = unsafe { low.lane(i).filter_converted(converted_lower) };
+                if frac[i] != 0.0 {
+                    // SAFETY: as for the lower level.
+                    let b = unsafe { high.lane(i).filter_converted(converted_upper) };
+                    for c in 0..8 {
+                        both[c] = both[c] + (b[c] - both[c]) * frac[i];
+                    }
+                }
+                for c in 0..8 {
+                    out[c][i] = both[c];
+                }
+            }
+            return out;
+        }
         for i in 0..N {
             // SAFETY: `footprint_lanes` addresses each level's rows and columns along its own
             // size, and the second texture's levels are the first's sizes
@@ -1081,9 +1211,12 @@ mod tests {
         let bits = |v: Vec4| v.to_array().map(f32::to_bits);
         for (w, h) in [(16, 16), (12, 5), (32, 8)] {
             let (a, b) = (pattern(w, h, 0), pattern(w, h, 3));
+            let converted = PairedTexels::new(&a, &b).expect("same shape");
             for s in &samplers {
                 for k in 0..a.level_count() {
-                    let pair = s.trilinear_pair(&a, &b, k as f32).expect("same shape");
+                    let bytes = s.trilinear_pair(&a, &b, k as f32).expect("same shape");
+                    let pair = bytes.with_converted(&converted);
+                    assert!(pair.converted.is_some(), "the converted levels are taken");
                     for round in 0..200u32 {
                         let lods: [f32; 8] = std::array::from_fn(|_| {
                             let r = next();
@@ -1110,6 +1243,12 @@ mod tests {
                         });
                         let (u, v) = (uvs.map(|uv| uv.x), uvs.map(|uv| uv.y));
                         let lanes = pair.sample_lanes(&u, &v, &frac);
+                        let from_bytes = bytes.sample_lanes(&u, &v, &frac);
+                        assert_eq!(
+                            lanes.map(|c| c.map(f32::to_bits)),
+                            from_bytes.map(|c| c.map(f32::to_bits)),
+                            "converted texels against bytes"
+                        );
                         let quad = pair.sample_lanes(
                             &[u[0], u[1], u[2], u[3]],
                             &[v[0], v[1], v[2], v[3]],
@@ -1136,6 +1275,39 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// Converted texels hold `byte/255` of both textures, and a pair takes only converted
+    /// levels of its own texel counts (an unsafe read relies on that).
+    #[test]
+    fn converted_texels_are_the_bytes_over_255_and_must_fit() {
+        let (a, b) = (hashed_texture(12, 5, 7, 1), hashed_texture(12, 5, 7, 2));
+        let converted = PairedTexels::new(&a, &b).expect("same shape");
+        for (k, level) in converted.levels.iter().enumerate() {
+            let (la, lb) = (a.level(k).expect("level"), b.level(k).expect("level"));
+            assert_eq!(level.len(), la.texels.len());
+            for (i, t) in level.iter().enumerate() {
+                let want: [f32; 8] = std::array::from_fn(|c| {
+                    let byte = if c < 4 {
+                        la.texels[i][c]
+                    } else {
+                        lb.texels[i][c - 4]
+                    };
+                    (f64::from(byte) / 255.0) as f32
+                });
+                assert_eq!(t.0.map(f32::to_bits), want.map(f32::to_bits));
+            }
+        }
+        assert_eq!(converted.bytes(), 32 * (60 + 12 + 3 + 1));
+        assert!(PairedTexels::new(&a, &hashed_texture(12, 6, 7, 2)).is_none());
+        let s = Sampler::default();
+        let other = PairedTexels::new(&hashed_texture(16, 16, 7, 1), &hashed_texture(16, 16, 7, 2))
+            .expect("same shape");
+        for lod in [0.0, 1.5, 3.0] {
+            let pair = s.trilinear_pair(&a, &b, lod).expect("same shape");
+            assert!(pair.with_converted(&other).converted.is_none(), "{lod}");
+            assert!(pair.with_converted(&converted).converted.is_some(), "{lod}");
         }
     }
 

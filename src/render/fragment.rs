@@ -22,7 +22,7 @@
 //! golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::{MipLevel, TrilinearPair, level_of_detail};
+use crate::raster::texture::{MipLevel, PairedTexels, TrilinearPair, level_of_detail};
 use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
     AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
@@ -557,6 +557,9 @@ pub struct LayerMaps<'a> {
     pub colour: &'a Texture,
     /// Encoded tangents.
     pub tangent: &'a Texture,
+    /// `colour` and `tangent` converted side by side ([`PairedTexels`]), which the quad
+    /// stage reads instead of their bytes (the same values); `None` reads the bytes.
+    pub converted: Option<&'a PairedTexels>,
     /// Density bands (shells with a density map); `None` on fins, whose alpha the density
     /// scales instead.
     pub density: Option<&'a Texture>,
@@ -671,7 +674,11 @@ pub fn shade_fur_quad<'a>(
             batch.pair_lower = Some(lower);
             batch.pair = textures
                 .sampler
-                .trilinear_pair(textures.colour, textures.tangent, lod);
+                .trilinear_pair(textures.colour, textures.tangent, lod)
+                .map(|pair| match textures.converted {
+                    Some(converted) => pair.with_converted(converted),
+                    None => pair,
+                });
         }
     }
     let frac = if frac != 0.0 && upper != lower {

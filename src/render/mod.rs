@@ -20,7 +20,7 @@ use crate::fur::{self, FurParams};
 use crate::mesh::{self, Mesh};
 use crate::raster::{
     AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
-    Framebuffer, RasterError, RasterStats, Sampler, Texture,
+    Framebuffer, RasterError, RasterStats, Sampler, Texture, texture::PairedTexels,
 };
 use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
 use crate::simd::SimdLevel;
@@ -94,6 +94,8 @@ impl RenderError {
 struct LayerTextures {
     colour: Texture,
     tangent: Texture,
+    /// Both converted side by side for the quad stage's texture reads.
+    converted: Option<PairedTexels>,
     /// Density bands (shells, with a density map).
     density: Option<Texture>,
 }
@@ -104,9 +106,11 @@ fn texture(image: &fur::Rgba8Image) -> Result<Texture, RasterError> {
 
 impl LayerTextures {
     fn new(colour: &fur::Rgba8Image, tangent: &fur::Rgba8Image) -> Result<Self, RasterError> {
+        let (colour, tangent) = (texture(colour)?, texture(tangent)?);
         Ok(LayerTextures {
-            colour: texture(colour)?,
-            tangent: texture(tangent)?,
+            converted: PairedTexels::new(&colour, &tangent),
+            colour,
+            tangent,
             density: None,
         })
     }
@@ -115,6 +119,7 @@ impl LayerTextures {
         LayerMaps {
             colour: &self.colour,
             tangent: &self.tangent,
+            converted: self.converted.as_ref(),
             density: self.density.as_ref(),
             sampler,
             shell,
