@@ -173,6 +173,9 @@ struct PairTexel([f32; 8]);
 pub struct PairedTexels {
     /// Each level's texel count (its width × height, as in both textures) and its texels.
     levels: Vec<Vec<PairTexel>>,
+    /// Each level's alpha bytes of the first texture alone, for the nearest lookups that
+    /// read only alpha ([`NearestLookup::with_converted`]): a quarter of its texels' bytes.
+    alphas: Vec<Vec<u8>>,
 }
 
 impl PairedTexels {
@@ -206,15 +209,22 @@ impl PairedTexels {
                     .collect()
             })
             .collect();
-        Some(PairedTexels { levels })
+        let alphas = first
+            .levels
+            .iter()
+            .map(|l| l.texels.iter().map(|t| t[3]).collect())
+            .collect();
+        Some(PairedTexels { levels, alphas })
     }
 
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        self.levels
-            .iter()
-            .map(|l| l.len() * size_of::<PairTexel>())
-            .sum()
+        self.alphas.iter().map(Vec::len).sum::<usize>()
+            + self
+                .levels
+                .iter()
+                .map(|l| l.len() * size_of::<PairTexel>())
+                .sum::<usize>()
     }
 }
 
@@ -275,6 +285,12 @@ impl Texture {
     /// [`Sampler::sample_nearest_level`] reads.
     #[inline]
     pub fn nearest_level(&self, lod: f32) -> &MipLevel {
+        &self.levels[self.nearest_level_index(lod)]
+    }
+
+    /// The index of [`Texture::nearest_level`].
+    #[inline]
+    pub fn nearest_level_index(&self, lod: f32) -> usize {
         let max = (self.levels.len() - 1) as f32;
         let lod = if lod.is_nan() {
             0.0
@@ -282,7 +298,7 @@ impl Texture {
             lod.clamp(0.0, max)
         };
         // lod is in [0, max]: adding 0.5 and truncating rounds half up.
-        &self.levels[(lod + 0.5) as usize]
+        (lod + 0.5) as usize
     }
 
     /// Number of mip levels (1 for a 1×1 texture).
@@ -583,6 +599,7 @@ impl Sampler {
     pub fn nearest_lookup<'a>(&self, level: &'a MipLevel) -> NearestLookup<'a> {
         NearestLookup {
             level,
+            converted: None,
             u: LaneAddressing::new([level.width; 4], [self.address_u; 4]),
             v: LaneAddressing::new([level.height; 4], [self.address_v; 4]),
         }
@@ -988,8 +1005,29 @@ impl LaneAddressing {
 #[derive(Clone, Copy, Debug)]
 pub struct NearestLookup<'a> {
     level: &'a MipLevel,
+    /// The level converted ([`NearestLookup::with_converted`]): its texels' alphas are read
+    /// there, already divided.
+    converted: Option<&'a [u8]>,
     u: LaneAddressing,
     v: LaneAddressing,
+}
+
+impl<'a> NearestLookup<'a> {
+    /// These lookups reading the alphas of level `k` of `converted`, whose first texture is
+    /// the one this level belongs to, as level `k` of it (the same values, one load a lookup
+    /// instead of a byte and a table entry; the trilinear reads of the same quads have
+    /// usually brought those texels into the cache). Unchanged when that level's texel count
+    /// is not this level's (so it cannot be it).
+    pub fn with_converted(mut self, converted: &'a PairedTexels, k: usize) -> Self {
+        if let Some(texels) = converted
+            .alphas
+            .get(k)
+            .filter(|texels| texels.len() == self.level.texels.len())
+        {
+            self.converted = Some(texels.as_slice());
+        }
+        self
+    }
 }
 
 impl NearestLookup<'_> {
@@ -1006,6 +1044,15 @@ impl NearestLookup<'_> {
         let (y, _) = self.v.address_lanes(0, &y);
         let row = self.level.width as usize;
         let mut out = [0.0; N];
+        if let Some(converted) = self.converted {
+            for i in 0..N {
+                let index = y[i] as usize * row + x[i] as usize;
+                // SAFETY: as below; `with_converted` took a converted level of this level's
+                // texel count.
+                out[i] = UNORM8[usize::from(unsafe { *converted.get_unchecked(index) })];
+            }
+            return out;
+        }
         for i in 0..N {
             // SAFETY: `x[i]` and `y[i]` are addressed along this level's width and height
             // (`address_lanes` of addressing made from its size), so the index is in bounds.
@@ -1095,6 +1142,7 @@ mod tests {
             .map(|i| [0, 0, 0, (i * 37 + i / 64) as u8])
             .collect();
         let t = Texture::from_rgba8(64, 32, texels).expect("texture");
+        let converted = PairedTexels::new(&t, &t).expect("same shape");
         let specials = [f32::NAN, f32::INFINITY, -1e30, -0.0, 1.0, 0.999_999_9];
         for sampler in [
             Sampler::default(),
@@ -1103,9 +1151,16 @@ mod tests {
                 ..Sampler::default()
             },
         ] {
-            for level in 0..t.level_count() {
-                let level = t.level(level).expect("level");
+            for k_level in 0..t.level_count() {
+                let level = t.level(k_level).expect("level");
                 let lookup = sampler.nearest_lookup(level);
+                let from_alphas = lookup.with_converted(&converted, k_level);
+                assert!(from_alphas.converted.is_some(), "the alpha plane is taken");
+                // Another level's plane has another texel count: refused.
+                let wrong = sampler
+                    .nearest_lookup(level)
+                    .with_converted(&converted, (k_level + 1) % t.level_count());
+                assert!(wrong.converted.is_none());
                 for k in 0..500u32 {
                     let point = |i: u32| {
                         let j = k * 8 + i;
@@ -1120,6 +1175,12 @@ mod tests {
                     let (u, v): ([f32; 8], [f32; 8]) =
                         (u.try_into().expect("8"), v.try_into().expect("8"));
                     let got = lookup.alpha_lanes(u, v);
+                    let alphas = from_alphas.alpha_lanes(u, v);
+                    assert_eq!(
+                        alphas.map(f32::to_bits),
+                        got.map(f32::to_bits),
+                        "alpha plane"
+                    );
                     for i in 0..8 {
                         let want = sampler.alpha_nearest_in(level, Vec2::new(u[i], v[i]));
                         assert_eq!(got[i].to_bits(), want.to_bits(), "({}, {})", u[i], v[i]);
@@ -1299,7 +1360,7 @@ mod tests {
                 assert_eq!(t.0.map(f32::to_bits), want.map(f32::to_bits));
             }
         }
-        assert_eq!(converted.bytes(), 32 * (60 + 12 + 3 + 1));
+        assert_eq!(converted.bytes(), 33 * (60 + 12 + 3 + 1));
         assert!(PairedTexels::new(&a, &hashed_texture(12, 6, 7, 2)).is_none());
         let s = Sampler::default();
         let other = PairedTexels::new(&hashed_texture(16, 16, 7, 1), &hashed_texture(16, 16, 7, 2))

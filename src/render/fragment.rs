@@ -657,6 +657,7 @@ pub fn shade_fur_quad<'a>(
     );
     let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
     let (lower, upper, frac) = textures.colour.trilinear_indices(lod);
+    let shadow_index = textures.colour.nearest_level_index(lod);
     let shadow_level = textures.colour.nearest_level(lod);
     // The lanes of a batch read one pair of mip levels and one shadow level: a quad at others
     // runs what the batch holds first. (One call site of the batch's run per copy of the hot
@@ -668,6 +669,7 @@ pub fn shade_fur_quad<'a>(
     }
     if batch.len == 0 {
         batch.shadow_level = Some(shadow_level);
+        batch.shadow_index = shadow_index;
         // The pair depends on the lower level alone (the textures and sampler are the draw's):
         // kept from batch to batch while that stays.
         if batch.pair_lower != Some(lower) {
@@ -731,6 +733,8 @@ pub struct FurBatch<'a> {
     pair: Option<TrilinearPair<'a>>,
     /// The mip level the shadow's lookups of the lanes held read.
     shadow_level: Option<&'a MipLevel>,
+    /// The index of `shadow_level` in the colour map's chain.
+    shadow_index: usize,
     slots: [Option<PixelSlot>; BATCH_LANES],
     /// Each lane's varyings, interpolated whole.
     varyings: [FurVaryings; BATCH_LANES],
@@ -948,7 +952,12 @@ impl<'a> FurBatch<'a> {
                 if layer.lookups > 0
                     && let Some(level) = self.shadow_level
                 {
-                    let lookup = sampler.nearest_lookup(level);
+                    let lookup = match textures.converted {
+                        Some(converted) => sampler
+                            .nearest_lookup(level)
+                            .with_converted(converted, self.shadow_index),
+                        None => sampler.nearest_lookup(level),
+                    };
                     let uvs: [Vec2; N] = std::array::from_fn(|i| Vec2::new(u[i], v[i]));
                     let offsets: [Vec2; N] =
                         std::array::from_fn(|i| Vec2::new(offset_u[i], offset_v[i]));
