@@ -58,9 +58,9 @@ const STRAND_BYTES: u64 = 100; // root, 4 control points, radii, colour, lean
 const CONE_BYTES: u64 = 68; // p0, p1, r0, r1, axis, e1, e2
 const SAMPLE_BYTES: u64 = 20; // one supersample of a bake grid
 const DOWNSAMPLE_PER_TEXEL: u64 = 12 + 12 + 4 + 1; // colour, tangent, alpha, covered
-// Colour + tangent RGBA8 as baked, then as textures with mips (× 4/3), then converted side by
-// side to f32 for the texture reads and an alpha plane for the shadow (33 bytes × 4/3).
-const SHELL_PER_TEXEL: u64 = 8 + 11 + 44;
+// Colour + tangent RGBA8 as baked, then as textures with mips (× 4/3), then side by side for
+// the texture reads with an alpha plane for the shadow (9 bytes × 4/3).
+const SHELL_PER_TEXEL: u64 = 8 + 11 + 12;
 const VERTEX_BYTES: u64 = 92 + 100; // mesh::Vertex plus the temporaries of building frames
 const CLIP_VERTEX_BYTES: u64 = 16 + 112 + 40; // clip position + the fur varyings + its screen form
 const SETUP_TRIANGLE_BYTES: u64 = 160 + 12 + 8; // set-up triangle, corner indices, bin entries

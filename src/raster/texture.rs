@@ -134,17 +134,24 @@ impl BilinearFootprint {
 }
 
 impl BilinearFootprint {
-    /// [`BilinearFootprint::filter_pair`] from texels converted beforehand
-    /// ([`PairedTexels`]): the same operations on the same values, so the same bits, without
-    /// the per-read conversion and division.
+    /// [`BilinearFootprint::filter_pair`] from interleaved texels ([`PairedTexels`]): the same
+    /// values (`byte/255` by [`unorm8_exact`]) and the same filter operations, so the same
+    /// bits, with one load a texel and no division.
     ///
     /// # Safety
     /// This footprint's texel indices are of addressed rows and columns of a level of the
     /// size `level` was converted from.
     #[inline(always)]
     unsafe fn filter_converted(&self, level: &[PairTexel]) -> [f32; 8] {
-        // SAFETY: the function's contract; `level` holds one texel per texel of its level.
-        let texel = |i: usize| unsafe { level.get_unchecked(i).0 };
+        let texel = |i: usize| {
+            // SAFETY: the function's contract; `level` holds one texel per texel of its level.
+            let bytes = unsafe { level.get_unchecked(i).0 };
+            let mut t = [0.0f32; 8];
+            for c in 0..8 {
+                t[c] = unorm8_exact(f32::from(bytes[c]));
+            }
+            t
+        };
         let [i00, i10, i01, i11] = self.texels;
         let (t00, t10, t01, t11) = (texel(i00), texel(i10), texel(i01), texel(i11));
         let (fx, fy) = (self.fx, self.fy);
@@ -161,14 +168,24 @@ impl BilinearFootprint {
 /// One texel of [`PairedTexels`]: two RGBA8 texels as `byte/255`, aligned so that one
 /// 256-bit load reads it and no texel straddles two cache lines.
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-struct PairTexel([f32; 8]);
+#[repr(C, align(8))]
+struct PairTexel([u8; 8]);
 
-/// Two textures with one mip chain shape (a layer's colour and tangent maps), converted once:
-/// texel `i` of level `k` holds the first texture's `byte/255` in lanes 0–3 and the second's
-/// in 4–7, the values [`BilinearFootprint::filter_pair`] converts on every read. 32 bytes a
-/// texel against 8, for one load instead of two loads, two widenings, two conversions and two
-/// divisions per texel read (docs/performance.md, "Texel pairs converted once").
+/// `b/255` of a byte `b` given as a float, the correctly rounded quotient, without a division:
+/// `y = b·257/2^16` is exact, and `b/255 = y·(1 + 2^-16 + 2^-32 + …)`; `y + y·(2^-16 + 2^-32)`
+/// rounds to the quotient for every byte (test `unorm8_exact_is_the_quotient`).
+#[inline(always)]
+fn unorm8_exact(b: f32) -> f32 {
+    let y = b * (257.0 / 65536.0);
+    y + y * (1.0 / 65536.0 + 1.0 / 4_294_967_296.0)
+}
+
+/// Two textures with one mip chain shape (a layer's colour and tangent maps), interleaved
+/// once: texel `i` of level `k` holds the first texture's RGBA bytes in 0–3 and the second's in
+/// 4–7, so that a texel read of both is one 8-byte load, widened, converted and turned into
+/// `byte/255` by [`unorm8_exact`] (no division) in 8 lanes at once (docs/performance.md,
+/// "Texel pairs side by side"). Also each level's alpha bytes of the first texture alone, for
+/// the shadow's nearest lookups.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairedTexels {
     /// Each level's texel count (its width × height, as in both textures) and its texels.
@@ -198,14 +215,7 @@ impl PairedTexels {
                 a.texels
                     .iter()
                     .zip(&b.texels)
-                    .map(|(x, y)| {
-                        let mut t = [0.0f32; 8];
-                        for c in 0..4 {
-                            t[c] = f32::from(x[c]) / 255.0;
-                            t[c + 4] = f32::from(y[c]) / 255.0;
-                        }
-                        PairTexel(t)
-                    })
+                    .map(|(x, y)| PairTexel([x[0], x[1], x[2], x[3], y[0], y[1], y[2], y[3]]))
                     .collect()
             })
             .collect();
@@ -1349,18 +1359,18 @@ mod tests {
             let (la, lb) = (a.level(k).expect("level"), b.level(k).expect("level"));
             assert_eq!(level.len(), la.texels.len());
             for (i, t) in level.iter().enumerate() {
-                let want: [f32; 8] = std::array::from_fn(|c| {
-                    let byte = if c < 4 {
+                let want: [u8; 8] = std::array::from_fn(|c| {
+                    if c < 4 {
                         la.texels[i][c]
                     } else {
                         lb.texels[i][c - 4]
-                    };
-                    (f64::from(byte) / 255.0) as f32
+                    }
                 });
-                assert_eq!(t.0.map(f32::to_bits), want.map(f32::to_bits));
+                assert_eq!(t.0, want);
+                assert_eq!(converted.alphas[k][i], la.texels[i][3]);
             }
         }
-        assert_eq!(converted.bytes(), 33 * (60 + 12 + 3 + 1));
+        assert_eq!(converted.bytes(), 9 * (60 + 12 + 3 + 1));
         assert!(PairedTexels::new(&a, &hashed_texture(12, 6, 7, 2)).is_none());
         let s = Sampler::default();
         let other = PairedTexels::new(&hashed_texture(16, 16, 7, 1), &hashed_texture(16, 16, 7, 2))
@@ -1369,6 +1379,23 @@ mod tests {
             let pair = s.trilinear_pair(&a, &b, lod).expect("same shape");
             assert!(pair.with_converted(&other).converted.is_none(), "{lod}");
             assert!(pair.with_converted(&converted).converted.is_some(), "{lod}");
+        }
+    }
+
+    /// The division-free `byte/255` is the correctly rounded quotient for every byte (f64
+    /// holds `b/255` to 53 bits, so its rounding to f32 is the f32 quotient's, except at a tie,
+    /// which a quotient of a byte by 255 never is).
+    #[test]
+    fn unorm8_exact_is_the_quotient() {
+        for b in 0..=255u8 {
+            let want = f32::from(b) / 255.0;
+            assert_eq!(unorm8_exact(f32::from(b)).to_bits(), want.to_bits(), "{b}");
+            assert_eq!(
+                want.to_bits(),
+                ((f64::from(b) / 255.0) as f32).to_bits(),
+                "{b}"
+            );
+            assert_eq!(UNORM8[usize::from(b)].to_bits(), want.to_bits(), "{b}");
         }
     }
 
