@@ -18,7 +18,7 @@
 
 use super::framebuffer::TileTarget;
 use super::pipeline::{BlendMode, DepthCompare, DrawState};
-use super::setup::{PixelRect, SetupTriangle};
+use super::setup::{EdgeFunction, PixelRect, SetupTriangle};
 use super::varyings::Varyings;
 use glam::Vec4;
 
@@ -511,8 +511,20 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };
         let mut e = edges.map(|e| e.at(i64::from(x_start), i64::from(qy)));
-        let mut qx = x_start;
-        while qx < r.x1 {
+        // The quads of this row that no single edge rejects (`e + highest < 0` below), from
+        // each edge's value and step: the loop starts at the first and stops after the last,
+        // so what it skips are exactly quads it would have rejected. Thin and slanted
+        // triangles (fins, shells seen edge-on) leave most of their bounding box empty.
+        let Some((first, last)) = quad_span(&e, &highest, &edges, (r.x1 - x_start).div_ceil(2))
+        else {
+            continue;
+        };
+        for k in 0..3 {
+            e[k] += i64::from(first) * 2 * edges[k].step_x;
+        }
+        let mut qx = x_start + 2 * first;
+        let x_end = r.x1.min(x_start + 2 * (last + 1));
+        while qx < x_end {
             // The four lanes of edge k are e + {0, sx, sy, sx + sy}: their minimum and maximum
             // decide most quads without looking at single lanes.
             let all_in = (e[0] + lowest[0]) | (e[1] + lowest[1]) | (e[2] + lowest[2]) >= 0;
@@ -630,6 +642,36 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     stats.fragments_written += written;
 }
 
+/// The quads `first..=last` of a row of `quads` quads that may be covered: quad `n` of the row
+/// has edge values `e[k] + n·2·step_x` at its lane 0, and edge `k` rejects it when that plus
+/// `highest[k]` (the largest lane offset) is negative. `None` when every quad of the row is
+/// rejected. Exact integer arithmetic: the span is the set of quads no edge rejects.
+#[inline(always)]
+fn quad_span(
+    e: &[i64; 3],
+    highest: &[i64; 3],
+    edges: &[EdgeFunction; 3],
+    quads: u32,
+) -> Option<(u32, u32)> {
+    let (mut first, mut last) = (0i64, i64::from(quads) - 1);
+    for k in 0..3 {
+        let at_first = e[k] + highest[k];
+        let step = 2 * edges[k].step_x;
+        if step > 0 {
+            if at_first < 0 {
+                // The smallest n with at_first + n·step ≥ 0.
+                first = first.max((-at_first + step - 1) / step);
+            }
+        } else if at_first < 0 {
+            return None;
+        } else if step < 0 {
+            // The largest n with at_first + n·step ≥ 0.
+            last = last.min(at_first / -step);
+        }
+    }
+    (first <= last).then(|| (first as u32, last as u32))
+}
+
 /// The depth write and the blend of one shaded lane, with [`rasterize_quads`]'s fixed states.
 #[inline(always)]
 fn write_slot<const BLEND: u8, const WRITE: u8>(
@@ -677,6 +719,40 @@ pub fn blend(mode: BlendMode, src: Vec4, dst: Vec4) -> Vec4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The span is exactly the quads no edge rejects, for random edges of every sign.
+    #[test]
+    fn quad_span_is_the_quads_no_edge_rejects() {
+        let mut state = 0x9e37_79b9_u32;
+        let mut next = |range: i64| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            i64::from(state) % (2 * range + 1) - range
+        };
+        for _ in 0..20_000 {
+            let edges: [EdgeFunction; 3] = std::array::from_fn(|_| EdgeFunction {
+                step_x: next(40),
+                step_y: next(40),
+                offset: 0,
+                bias: 0,
+            });
+            let highest = edges.map(|e| e.step_x.max(0) + e.step_y.max(0));
+            let e: [i64; 3] = std::array::from_fn(|_| next(3000));
+            let quads = (next(20) + 21) as u32;
+            let kept: Vec<u32> = (0..quads)
+                .filter(|&n| {
+                    (0..3).all(|k| e[k] + i64::from(n) * 2 * edges[k].step_x + highest[k] >= 0)
+                })
+                .collect();
+            let want = kept.first().map(|&f| (f, *kept.last().unwrap_or(&f)));
+            assert_eq!(
+                quad_span(&e, &highest, &edges, quads),
+                want,
+                "{e:?} {edges:?}"
+            );
+        }
+    }
 
     #[test]
     fn alpha_blend_matches_the_formula() {
