@@ -669,7 +669,7 @@ fn quad_span(
             last = last.min(at_first / -step);
         }
     }
-    (first <= last).then(|| (first as u32, last as u32))
+    (first <= last).then_some((first as u32, last as u32))
 }
 
 /// The depth write and the blend of one shaded lane, with [`rasterize_quads`]'s fixed states.
