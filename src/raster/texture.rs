@@ -120,6 +120,13 @@ impl BilinearFootprint {
             }
             t
         };
+        self.filter_8(texel)
+    }
+
+    /// The bilinear filter of 8 channels (see [`BilinearFootprint::filter`]) of the texels
+    /// `texel(i)` gives for this footprint's indices.
+    #[inline(always)]
+    fn filter_8(&self, texel: impl Fn(usize) -> [f32; 8]) -> [f32; 8] {
         let [i00, i10, i01, i11] = self.texels;
         let (t00, t10, t01, t11) = (texel(i00), texel(i10), texel(i01), texel(i11));
         let (fx, fy) = (self.fx, self.fy);
@@ -152,21 +159,12 @@ impl BilinearFootprint {
             }
             t
         };
-        let [i00, i10, i01, i11] = self.texels;
-        let (t00, t10, t01, t11) = (texel(i00), texel(i10), texel(i01), texel(i11));
-        let (fx, fy) = (self.fx, self.fy);
-        let mut out = [0.0f32; 8];
-        for c in 0..8 {
-            let top = t00[c] + (t10[c] - t00[c]) * fx;
-            let bottom = t01[c] + (t11[c] - t01[c]) * fx;
-            out[c] = top + (bottom - top) * fy;
-        }
-        out
+        self.filter_8(texel)
     }
 }
 
-/// One texel of [`PairedTexels`]: two RGBA8 texels as `byte/255`, aligned so that one
-/// 256-bit load reads it and no texel straddles two cache lines.
+/// One texel of [`PairedTexels`]: two RGBA8 texels side by side, 8-byte aligned so that one
+/// load reads it and no texel straddles two cache lines.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(8))]
 struct PairTexel([u8; 8]);
