@@ -119,12 +119,7 @@ fn check_scene(name: &str, variant: Variant) {
         "{file}: reference size differs"
     );
     if expected.as_raw() != &actual {
-        let differing = expected
-            .as_raw()
-            .chunks(4)
-            .zip(actual.chunks(4))
-            .filter(|(a, b)| a != b)
-            .count();
+        let differing = common::differing_pixels(expected.as_raw(), &actual);
         let stem = file.trim_end_matches(".png");
         let diff = write_diff(
             stem,

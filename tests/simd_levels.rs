@@ -38,11 +38,7 @@ fn every_level_renders_the_same_bytes() {
                 .render_at_simd(time, 32, level)
                 .expect("renders")
                 .rgba8;
-            let differing = image
-                .chunks(4)
-                .zip(reference.chunks(4))
-                .filter(|(a, b)| a != b)
-                .count();
+            let differing = common::differing_pixels(&image, &reference);
             assert_eq!(differing, 0, "{name} at {level}: {differing} pixels differ");
         }
     }

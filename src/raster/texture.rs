@@ -759,13 +759,13 @@ pub struct TrilinearPair<'a> {
     second: [&'a MipLevel; 2],
     /// The indices of the two levels.
     indices: [usize; 2],
-    /// Both textures' levels converted ([`TrilinearPair::with_converted`]), read instead of
-    /// the bytes by [`TrilinearPair::sample_lanes`].
+    /// Both textures' levels interleaved ([`TrilinearPair::with_converted`]), read instead of
+    /// the two maps' bytes by [`TrilinearPair::sample_lanes`].
     converted: Option<[&'a [PairTexel]; 2]>,
 }
 
 impl<'a> TrilinearPair<'a> {
-    /// This pair reading `converted`, the same two textures converted beforehand, in
+    /// This pair reading `converted`, the same two textures interleaved beforehand, in
     /// [`TrilinearPair::sample_lanes`] (the same values). Unchanged when `converted` has
     /// another shape than this pair's textures (so it cannot be of them).
     pub fn with_converted(mut self, converted: &'a PairedTexels) -> Self {
@@ -837,6 +837,10 @@ impl TrilinearPair<'_> {
             low
         };
         let mut out = [[0.0f32; N]; 8];
+        // The two ways of reading texels as two written-out loops, not one loop over a
+        // closure or a match: a closure is not `#[inline(always)]`, and LLVM left one out of
+        // line, compiled for the baseline (+39 % instructions a frame); a match inside the
+        // loop cost as much.
         if let Some([converted_lower, converted_upper]) = self.converted {
             for i in 0..N {
                 // SAFETY: `footprint_lanes` addresses each level's rows and columns along its
@@ -1013,19 +1017,20 @@ impl LaneAddressing {
 #[derive(Clone, Copy, Debug)]
 pub struct NearestLookup<'a> {
     level: &'a MipLevel,
-    /// The level converted ([`NearestLookup::with_converted`]): its texels' alphas are read
-    /// there, already divided.
+    /// The level's alpha plane ([`NearestLookup::with_converted`]), read instead of its
+    /// 4-byte texels.
     converted: Option<&'a [u8]>,
     u: LaneAddressing,
     v: LaneAddressing,
 }
 
 impl<'a> NearestLookup<'a> {
-    /// These lookups reading the alphas of level `k` of `converted`, whose first texture is
-    /// the one this level belongs to, as level `k` of it (the same values, one load a lookup
-    /// instead of a byte and a table entry; the trilinear reads of the same quads have
-    /// usually brought those texels into the cache). Unchanged when that level's texel count
-    /// is not this level's (so it cannot be it).
+    /// These lookups reading the alpha plane of level `k` of `converted`, whose first texture
+    /// must be the one this level is level `k` of: the same values from 1 byte a texel instead
+    /// of 4, a quarter of the cache lines. Unchanged when that plane's texel count is not this
+    /// level's (so reads stay in bounds whatever `k`; a wrong `k` of the same size would read
+    /// another level's alphas, which the caller rules out by taking `k` from
+    /// [`Texture::nearest_level_index`]).
     pub fn with_converted(mut self, converted: &'a PairedTexels, k: usize) -> Self {
         if let Some(texels) = converted
             .alphas
@@ -1052,6 +1057,7 @@ impl NearestLookup<'_> {
         let (y, _) = self.v.address_lanes(0, &y);
         let row = self.level.width as usize;
         let mut out = [0.0; N];
+        // Two written-out loops, as in `TrilinearPair::sample_lanes`.
         if let Some(converted) = self.converted {
             for i in 0..N {
                 let index = y[i] as usize * row + x[i] as usize;
@@ -1347,10 +1353,10 @@ mod tests {
         }
     }
 
-    /// Converted texels hold `byte/255` of both textures, and a pair takes only converted
-    /// levels of its own texel counts (an unsafe read relies on that).
+    /// Interleaved texels hold both maps' bytes and the first's alphas, and a pair takes only
+    /// interleaved levels of its own texel counts (an unsafe read relies on that).
     #[test]
-    fn converted_texels_are_the_bytes_over_255_and_must_fit() {
+    fn interleaved_texels_are_the_maps_bytes_and_must_fit() {
         let (a, b) = (hashed_texture(12, 5, 7, 1), hashed_texture(12, 5, 7, 2));
         let converted = PairedTexels::new(&a, &b).expect("same shape");
         for (k, level) in converted.levels.iter().enumerate() {

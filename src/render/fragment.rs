@@ -557,8 +557,8 @@ pub struct LayerMaps<'a> {
     pub colour: &'a Texture,
     /// Encoded tangents.
     pub tangent: &'a Texture,
-    /// `colour` and `tangent` converted side by side ([`PairedTexels`]), which the quad
-    /// stage reads instead of their bytes (the same values); `None` reads the bytes.
+    /// `colour` and `tangent` interleaved ([`PairedTexels`]), which the quad stage reads
+    /// instead of the two maps (the same values); `None` reads the maps.
     pub converted: Option<&'a PairedTexels>,
     /// Density bands (shells with a density map); `None` on fins, whose alpha the density
     /// scales instead.

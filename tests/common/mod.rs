@@ -44,14 +44,16 @@ pub fn render_checking_twin(scene: &Scene, tile: u32, what: &str) -> Vec<u8> {
         .render_scalar_twin_at(scene.time, tile)
         .expect("scene renders")
         .rgba8;
-    let differing = image
-        .chunks(4)
-        .zip(twin.chunks(4))
-        .filter(|(a, b)| a != b)
-        .count();
+    let differing = differing_pixels(&image, &twin);
     assert_eq!(
         differing, 0,
         "{what}: the scalar twin differs in {differing} pixels"
     );
     image
+}
+
+/// How many RGBA8 pixels of two images of one size differ.
+pub fn differing_pixels(a: &[u8], b: &[u8]) -> usize {
+    assert_eq!(a.len(), b.len(), "images of different sizes");
+    a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count()
 }
