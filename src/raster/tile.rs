@@ -118,31 +118,63 @@ pub struct Quad<'q, V> {
     pub depth: [f32; 4],
     /// Whether the triangle runs counter-clockwise in NDC.
     pub front_facing: bool,
-    lanes: LaneSource<'q, V>,
+    corners: [&'q V; 3],
+    weights: [[f32; 4]; 3],
 }
 
 impl<'q, V: Varyings> Quad<'q, V> {
-    /// A quad of hand-given lanes, for testing quad shaders without rasterizing.
-    pub fn new(x: u32, y: u32, depth: [f32; 4], varyings: &'q [V; 4]) -> Self {
+    /// A quad of the triangle `corners` whose lane `l` has the perspective-correct weights
+    /// `weights[k][l]` (corner `k`), for testing quad shaders without rasterizing. Like the
+    /// rasterizer's, the corners must stay unchanged while a shader's
+    /// [`QuadShader::Deferred`] that saw them lives: a shader may know a triangle by the
+    /// addresses of its corners.
+    pub fn new(
+        x: u32,
+        y: u32,
+        depth: [f32; 4],
+        corners: [&'q V; 3],
+        weights: [[f32; 4]; 3],
+    ) -> Self {
         Quad {
             x: x & !1,
             y: y & !1,
             depth,
             front_facing: true,
-            lanes: LaneSource::Given(varyings),
+            corners,
+            weights,
+        }
+    }
+
+    /// The triangle's corners, which every lane is interpolated from.
+    #[inline(always)]
+    pub fn corners(&self) -> [&'q V; 3] {
+        self.corners
+    }
+
+    /// Each lane's weights: `weights()[k][l]` weighs corner `k` in lane `l`.
+    #[inline(always)]
+    pub fn weights(&self) -> &[[f32; 4]; 3] {
+        &self.weights
+    }
+
+    #[inline(always)]
+    fn source(&self) -> LaneSource<'q, V> {
+        LaneSource::Corners {
+            corners: self.corners,
+            weights: self.weights,
         }
     }
 
     /// The interpolated varyings of every lane.
     #[inline]
     pub fn varyings(&self) -> [V; 4] {
-        std::array::from_fn(|lane| self.lanes.lane(lane))
+        std::array::from_fn(|lane| self.lane(lane))
     }
 
     /// The interpolated varyings of lane `lane` (0..4).
     #[inline(always)]
     pub fn lane(&self, lane: usize) -> V {
-        self.lanes.lane(lane.min(3))
+        self.field(lane, |v| v)
     }
 
     /// One field of lane `lane`'s varyings, interpolated on its own: the same bits as that
@@ -152,17 +184,15 @@ impl<'q, V: Varyings> Quad<'q, V> {
     #[inline(always)]
     pub fn field<T: Varyings>(&self, lane: usize, field: impl Fn(&V) -> &T) -> T {
         let lane = lane.min(3);
-        match &self.lanes {
-            LaneSource::Given(values) => *field(&values[lane]),
-            LaneSource::Corners { corners, weights } => T::weighted_sum(
-                field(corners[0]),
-                weights[0][lane],
-                field(corners[1]),
-                weights[1][lane],
-                field(corners[2]),
-                weights[2][lane],
-            ),
-        }
+        let (corners, weights) = (&self.corners, &self.weights);
+        T::weighted_sum(
+            field(corners[0]),
+            weights[0][lane],
+            field(corners[1]),
+            weights[1][lane],
+            field(corners[2]),
+            weights[2][lane],
+        )
     }
 
     /// Lane `lane` (0..4) as a single fragment.
@@ -174,15 +204,15 @@ impl<'q, V: Varyings> Quad<'q, V> {
             y: self.y + (lane as u32 >> 1),
             depth: self.depth[lane],
             front_facing: self.front_facing,
-            varyings: self.lanes.lane(lane),
-            lanes: self.lanes,
+            varyings: self.lane(lane),
+            lanes: self.source(),
         }
     }
 
     /// Coarse screen-space derivatives, the same for every lane (see [`Fragment::derivatives`]).
     #[inline]
     pub fn derivatives<T: Varyings>(&self, f: impl Fn(&V) -> T) -> (T, T) {
-        self.lanes.derivatives(f)
+        self.source().derivatives(f)
     }
 }
 
@@ -603,10 +633,8 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
                 y: qy,
                 depth: z,
                 front_facing: tri.front_facing,
-                lanes: LaneSource::Corners {
-                    corners: varyings,
-                    weights,
-                },
+                corners: varyings,
+                weights,
             };
             let slots = QuadSlots {
                 origin: quad_index as u32,
@@ -804,20 +832,6 @@ mod tests {
         assert_eq!(*Fragment::new(0, 0, 0.5, &quad, 3).varyings(), 20.0);
     }
 
-    /// A quad interpolated from corners, as the rasterizer makes it.
-    fn quad_from_corners<'q>(
-        corners: [&'q [f32; 6]; 3],
-        weights: [[f32; 4]; 3],
-    ) -> Quad<'q, [f32; 6]> {
-        Quad {
-            x: 0,
-            y: 0,
-            depth: [0.5; 4],
-            front_facing: true,
-            lanes: LaneSource::Corners { corners, weights },
-        }
-    }
-
     #[test]
     fn a_field_interpolated_alone_is_that_field_of_the_whole_lane() {
         let specials = [
@@ -846,7 +860,13 @@ mod tests {
                 std::array::from_fn(|c| std::array::from_fn(|i| next(round + c + i)));
             let weights: [[f32; 4]; 3] =
                 std::array::from_fn(|c| std::array::from_fn(|l| next(round * 3 + c + l)));
-            let quad = quad_from_corners([&corners[0], &corners[1], &corners[2]], weights);
+            let quad = Quad::new(
+                0,
+                0,
+                [0.5; 4],
+                [&corners[0], &corners[1], &corners[2]],
+                weights,
+            );
             let whole = quad.varyings();
             for i in 0..6 {
                 let alone: [f32; 4] = std::array::from_fn(|lane| quad.field(lane, |v| &v[i]));
@@ -859,13 +879,13 @@ mod tests {
                     assert_eq!(quad.lane(lane)[i].to_bits(), whole[lane][i].to_bits());
                 }
             }
-            // Hand-given lanes read back as given.
-            let given = Quad::new(4, 6, [0.5; 4], &whole);
-            for i in 0..6 {
-                let alone: [f32; 4] = std::array::from_fn(|lane| given.field(lane, |v| &v[i]));
-                for lane in 0..4 {
-                    assert_eq!(alone[lane].to_bits(), whole[lane][i].to_bits());
-                }
+            // A lane as a fragment is the same lane.
+            for (lane, values) in whole.iter().enumerate() {
+                let fragment = quad.fragment(lane);
+                assert_eq!(
+                    fragment.varyings().map(f32::to_bits),
+                    values.map(f32::to_bits)
+                );
             }
         }
     }

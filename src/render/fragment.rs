@@ -93,8 +93,26 @@ pub struct LitVaryings {
 }
 
 /// Number of `f32` components of [`FurVaryings`].
-#[cfg(test)]
 const FUR_VARYING_FLOATS: usize = size_of::<FurVaryings>() / size_of::<f32>();
+
+/// The index of a field's first component in [`FurVaryings`] seen as `f32`s.
+macro_rules! component {
+    ($($field:tt)+) => {
+        std::mem::offset_of!(FurVaryings, $($field)+) / size_of::<f32>()
+    };
+}
+const UV: usize = component!(surface.uv);
+const WIND_UV: usize = component!(surface.wind_uv);
+const SHADOW: usize = component!(surface.shadow);
+const MESH_UV: usize = component!(surface.mesh_uv);
+const LENGTH: usize = component!(surface.length);
+const FADE: usize = component!(surface.fade);
+const NORMAL: usize = component!(surface.normal);
+const OBJECT: usize = component!(surface.object);
+const LIGHT: usize = component!(lit.light);
+const EYE: usize = component!(lit.eye);
+const WIND: usize = component!(lit.wind);
+const LEAN: usize = component!(lit.lean);
 
 /// Implements [`Varyings`] for a `repr(C)` struct of `f32` fields: component by component
 /// `(a·wa + b·wb) + c·wc`, like every field's own `weighted_sum`, over the struct seen as one
@@ -664,10 +682,19 @@ pub fn shade_fur_quad<'a>(
     // path keeps that copy small.)
     let lanes = slots.lanes();
     let full = batch.len + lanes.count_ones() as usize > BATCH_LANES;
-    if batch.len != 0 && (full || !batch.reads(lower, shadow_level)) {
+    // The triangle, known by its corners' addresses: they stay in place and unchanged while
+    // the batch lives (one per tile and draw, [`QuadShader::Deferred`]).
+    let triangle = quad.corners().map(|c| std::ptr::from_ref(c) as usize);
+    if batch.len != 0
+        && (full || !batch.reads(lower, shadow_level) || batch.varyings.triangle != triangle)
+    {
         batch.run(textures, maps, layer, p, &mut write);
     }
     if batch.len == 0 {
+        if batch.varyings.triangle != triangle {
+            batch.varyings.triangle = triangle;
+            batch.varyings.corners = quad.corners().map(|c| *bytemuck::cast_ref(c));
+        }
         batch.shadow_level = Some(shadow_level);
         batch.shadow_index = shadow_index;
         // The pair depends on the lower level alone (the textures and sampler are the draw's):
@@ -697,10 +724,9 @@ pub fn shade_fur_quad<'a>(
         };
         let i = batch.len;
         batch.slots[i] = Some(slot);
-        batch.varyings[i] = FurVaryings {
-            surface: quad.field(lane, |v| &v.surface),
-            lit: quad.field(lane, |v| &v.lit),
-        };
+        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
+            lanes[i] = quad_lanes[lane];
+        }
         batch.lod[i] = lod;
         batch.frac[i] = frac;
         batch.len += 1;
@@ -736,26 +762,53 @@ pub struct FurBatch<'a> {
     /// The index of `shadow_level` in the colour map's chain.
     shadow_index: usize,
     slots: [Option<PixelSlot>; BATCH_LANES],
-    /// Each lane's varyings, interpolated whole.
-    varyings: [FurVaryings; BATCH_LANES],
+    /// The lanes' triangle and weights, interpolated a component at a time when read.
+    varyings: BatchVaryings,
     /// Each lane's level of detail (its quad's), read where a lane is sampled alone.
     lod: [f32; BATCH_LANES],
     /// Each lane's blend fraction between the pair's levels.
     frac: [f32; BATCH_LANES],
 }
 
-/// The components of `N` lanes' vectors, one array each.
-#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
-#[inline(always)]
-fn gather_vec3<const N: usize>(
-    lanes: &[FurVaryings; N],
-    f: impl Fn(&FurVaryings) -> Vec3,
-) -> Vec3xN<N> {
-    let mut out = Vec3xN::default();
-    for i in 0..N {
-        (out.x[i], out.y[i], out.z[i]) = f(&lanes[i]).into();
+/// The varyings of a [`FurBatch`]'s lanes: their triangle's corners and each lane's weights.
+/// Every lane of a batch lies in one triangle, so a component of all lanes is the corners'
+/// component, broadcast, under the lanes' weights: per-lane arrays straight away, the
+/// component by component `(a·wa + b·wb) + c·wc` of [`Quad::field`], and only the
+/// components a batch reads.
+#[derive(Default)]
+struct BatchVaryings {
+    /// The addresses of the triangle's corners (zeros before the first).
+    triangle: [usize; 3],
+    /// The corners' varyings as `f32` components.
+    corners: [[f32; FUR_VARYING_FLOATS]; 3],
+    /// `weights[k][i]`: lane `i`'s weight of corner `k`.
+    weights: [[f32; BATCH_LANES]; 3],
+}
+
+impl BatchVaryings {
+    /// Component `c` ([`FurVaryings`] as `f32`s) of every lane.
+    #[inline(always)]
+    fn component(&self, c: usize) -> [f32; BATCH_LANES] {
+        let [a, b, d] = [0, 1, 2].map(|k| self.corners[k][c]);
+        let [wa, wb, wd] = &self.weights;
+        std::array::from_fn(|i| (a * wa[i] + b * wb[i]) + d * wd[i])
     }
-    out
+
+    /// The 2-vector from component `c` on, of every lane.
+    #[inline(always)]
+    fn vec2(&self, c: usize) -> [[f32; BATCH_LANES]; 2] {
+        [self.component(c), self.component(c + 1)]
+    }
+
+    /// The 3-vector from component `c` on, of every lane.
+    #[inline(always)]
+    fn vec3(&self, c: usize) -> Vec3x8 {
+        Vec3xN {
+            x: self.component(c),
+            y: self.component(c + 1),
+            z: self.component(c + 2),
+        }
+    }
 }
 
 impl<'a> FurBatch<'a> {
@@ -790,19 +843,20 @@ impl<'a> FurBatch<'a> {
         self.len = 0;
         // Lanes still alive: bit i for lane i.
         let mut alive = (1u32 << len) - 1;
-        let lanes = &self.varyings;
+        let varyings = &self.varyings;
         let sampler = textures.sampler;
         // Step 2: the texel that lands here is read at uv − wind_uv.
+        let ([uv_u, uv_v], wind_uv) = (varyings.vec2(UV), varyings.vec2(WIND_UV));
         let (mut u, mut v) = ([0.0f32; N], [0.0f32; N]);
         for i in 0..N {
-            let s = &lanes[i].surface;
-            (u[i], v[i]) = (s.uv.x - s.wind_uv.x, s.uv.y - s.wind_uv.y);
+            (u[i], v[i]) = (uv_u[i] - wind_uv[0][i], uv_v[i] - wind_uv[1][i]);
         }
+        let mesh_uv = |i: usize, [u, v]: &[[f32; N]; 2]| Vec2::new(u[i], v[i]);
         // Step 1: the burn (lane by lane; its charring waits for the spots).
         let mut charred = 0u32;
         let mut char_factor = [1.0f32; N];
         if p.burn.is_some() {
-            let unit_normals = gather_vec3(lanes, |l| l.surface.normal).normalize_or_zero();
+            let unit_normals = varyings.vec3(NORMAL).normalize_or_zero();
             for i in 0..len {
                 match p.burn_outcome_at_unit_normal(unit_normals.lane(i), layer) {
                     BurnOutcome::Burnt => alive &= !(1 << i),
@@ -817,12 +871,12 @@ impl<'a> FurBatch<'a> {
         if textures.shell
             && let Some(length_map) = &maps.length
         {
+            let (length, at) = (varyings.component(LENGTH), varyings.vec2(MESH_UV));
             for i in 0..len {
-                let s = &lanes[i].surface;
                 if !shading::layer_within_length(
                     layer.height_fraction,
-                    s.length,
-                    maps.sample(length_map, s.mesh_uv).x,
+                    length[i],
+                    maps.sample(length_map, mesh_uv(i, &at)).x,
                 ) {
                     alive &= !(1 << i);
                 }
@@ -853,9 +907,9 @@ impl<'a> FurBatch<'a> {
         let mut coverage = texels[3];
         let mut density = [0.0f32; N];
         if let Some(density_map) = &maps.density {
+            let at = varyings.vec2(MESH_UV);
             for i in 0..len {
-                let s = &lanes[i].surface;
-                let d = maps.sample(density_map, s.mesh_uv).x;
+                let d = maps.sample(density_map, mesh_uv(i, &at)).x;
                 density[i] = d;
                 coverage[i] = match textures.density {
                     Some(bands) => shading::density_alpha(
@@ -866,9 +920,10 @@ impl<'a> FurBatch<'a> {
                 };
             }
         }
+        let fade = varyings.component(FADE);
         let mut alpha = [0.0f32; N];
         for i in 0..N {
-            alpha[i] = coverage[i] * lanes[i].surface.fade;
+            alpha[i] = coverage[i] * fade[i];
         }
         if layer.lod_span != 1.0 {
             for a in &mut alpha {
@@ -913,21 +968,25 @@ impl<'a> FurBatch<'a> {
             z: texels[2],
         };
         if let Some(tint) = &maps.colour {
+            let at = varyings.vec2(MESH_UV);
             for i in 0..len {
                 let tinted = shading::tint_strand(
                     strand.lane(i),
-                    maps.sample(tint, lanes[i].surface.mesh_uv).truncate(),
+                    maps.sample(tint, mesh_uv(i, &at)).truncate(),
                 );
                 (strand.x[i], strand.y[i], strand.z[i]) = tinted.into();
             }
         }
         // Step 6: the shell shadow, lookup k of every lane in one batch. Wind moves the fur
         // above this layer further, so its displacement adds to the lookup (3.3.1).
+        let shadow_uv = varyings.vec2(SHADOW);
         let mut offset_u = [0.0f32; N];
         let mut offset_v = [0.0f32; N];
         for i in 0..N {
-            let s = &lanes[i].surface;
-            (offset_u[i], offset_v[i]) = (s.shadow.x + s.wind_uv.x, s.shadow.y + s.wind_uv.y);
+            (offset_u[i], offset_v[i]) = (
+                shadow_uv[0][i] + wind_uv[0][i],
+                shadow_uv[1][i] + wind_uv[1][i],
+            );
         }
         let mut shadow = [0.0f32; N];
         match (&maps.density, textures.density) {
@@ -981,8 +1040,8 @@ impl<'a> FurBatch<'a> {
         }
         // Step 4: the spots, then the burn's charring.
         if !p.spots.is_empty() {
-            let object = gather_vec3(lanes, |l| l.surface.object);
-            let unit_normals = gather_vec3(lanes, |l| l.surface.normal).normalize_or_zero();
+            let object = varyings.vec3(OBJECT);
+            let unit_normals = varyings.vec3(NORMAL).normalize_or_zero();
             for spot in &p.spots {
                 let weights = spot.weights_lanes(&object, &unit_normals);
                 strand = shading::apply_spot_lanes(&strand, spot.colour(), weights);
@@ -1003,10 +1062,10 @@ impl<'a> FurBatch<'a> {
             y: texels[5],
             z: texels[6],
         };
-        let wind = gather_vec3(lanes, |l| l.lit.wind);
-        let lean = gather_vec3(lanes, |l| l.lit.lean);
-        let light = gather_vec3(lanes, |l| l.lit.light);
-        let eye = gather_vec3(lanes, |l| l.lit.eye);
+        let wind = varyings.vec3(WIND);
+        let lean = varyings.vec3(LEAN);
+        let light = varyings.vec3(LIGHT);
+        let eye = varyings.vec3(EYE);
         let lighting = shading::strand_lighting_lanes(
             &lit_tangents_lanes(&encoded_tangent, &wind, &lean, layer, p),
             &Vec3x8::splat(Vec3::Z),
@@ -1410,6 +1469,60 @@ mod tests {
                 lit: LitVaryings::weighted_sum(&a.lit, w[0], &b.lit, w[1], &c.lit, w[2]),
             };
             assert_eq!(bits(&parts), bits(&expected));
+        }
+    }
+
+    #[test]
+    fn a_batch_interpolates_each_lane_as_the_whole_lane() {
+        let mut rng = Lcg::new(29);
+        let random = |rng: &mut Lcg| {
+            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
+            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
+            floats
+        };
+        for _ in 0..200 {
+            let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
+            let weights: [[f32; BATCH_LANES]; 3] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rng.range(-1.0, 2.0)));
+            let batch = BatchVaryings {
+                triangle: [1, 2, 3],
+                corners,
+                weights,
+            };
+            let corner = corners.map(bytemuck::cast::<_, FurVaryings>);
+            for i in 0..BATCH_LANES {
+                let whole = FurVaryings::weighted_sum(
+                    &corner[0],
+                    weights[0][i],
+                    &corner[1],
+                    weights[1][i],
+                    &corner[2],
+                    weights[2][i],
+                );
+                let floats = bytemuck::cast::<_, [f32; FUR_VARYING_FLOATS]>(whole);
+                for (c, value) in floats.iter().enumerate() {
+                    assert_eq!(batch.component(c)[i].to_bits(), value.to_bits());
+                }
+                // The named components are the fields they name.
+                let v2 = |c: usize| {
+                    let [x, y] = batch.vec2(c);
+                    Vec2::new(x[i], y[i])
+                };
+                let s = &whole.surface;
+                assert_eq!(v2(UV), s.uv);
+                assert_eq!(v2(WIND_UV), s.wind_uv);
+                assert_eq!(v2(SHADOW), s.shadow);
+                assert_eq!(v2(MESH_UV), s.mesh_uv);
+                assert_eq!(batch.component(LENGTH)[i], s.length);
+                assert_eq!(batch.component(FADE)[i], s.fade);
+                assert_eq!(batch.vec3(NORMAL).lane(i), s.normal);
+                assert_eq!(batch.vec3(OBJECT).lane(i), s.object);
+                let l = &whole.lit;
+                assert_eq!(batch.vec3(LIGHT).lane(i), l.light);
+                assert_eq!(batch.vec3(EYE).lane(i), l.eye);
+                assert_eq!(batch.vec3(WIND).lane(i), l.wind);
+                assert_eq!(batch.vec3(LEAN).lane(i), l.lean);
+            }
         }
     }
 
