@@ -262,6 +262,23 @@ impl QuadSlots {
             depth: self.depth[lane],
         })
     }
+
+    /// The slots of all four lanes, when all four are open (the common quad, inside its
+    /// triangle): [`QuadSlots::take`] of lanes 0 to 3 in one step. `None`, taking nothing,
+    /// when any lane is not open.
+    #[inline(always)]
+    pub fn take_whole(&mut self) -> Option<[PixelSlot; 4]> {
+        if self.open != 0b1111 {
+            return None;
+        }
+        self.open = 0;
+        let (origin, row) = (self.origin, self.row);
+        let index = [origin, origin + 1, origin + row, origin + row + 1];
+        Some(std::array::from_fn(|lane| PixelSlot {
+            index: index[lane],
+            depth: self.depth[lane],
+        }))
+    }
 }
 
 /// The fragment stage of a draw, one quad at a time, so a shader can share per-quad work (the
@@ -275,7 +292,9 @@ impl QuadSlots {
 /// after each triangle of a draw that writes depth (a later triangle's depth test reads what
 /// it wrote), and at the end of each tile's draw. The lanes held are therefore always distinct
 /// pixels, and their order does not matter to the blend: in a closed mesh, where each pixel is
-/// covered once per draw, the shader's batches run full across the triangles.
+/// covered once per draw, the shader's batches run full across the triangles. The corners a
+/// quad is interpolated from ([`Quad::corners`], the draw's vertex stage output) stay in place
+/// and unchanged while a `Deferred` lives, so a shader may know a triangle by their addresses.
 ///
 /// Contract: the colour given for a lane depends only on its quad and the lane — never on
 /// which other lanes are shaded, nor on which lanes share a batch — so a quad shader gives the
@@ -291,6 +310,11 @@ pub trait QuadShader<V>: Send + Sync {
     /// What the shader keeps between quads (`()` for none). One is made per tile and draw, and
     /// it is empty again after each [`QuadShader::finish`].
     type Deferred: Default;
+
+    /// Whether the shader's batches may hold lanes of several triangles (where the draw writes
+    /// no depth). `false`: the rasterizer calls [`QuadShader::finish`] after each triangle
+    /// and keeps no bit per pixel.
+    const ACROSS_TRIANGLES: bool = true;
 
     /// Shades the lanes of `slots` ([`QuadSlots::lanes`]) and writes the colour of each lane
     /// it keeps to the lane's slot, now or by [`QuadShader::finish`]; a lane never
@@ -367,12 +391,13 @@ pub(crate) struct HeldPixels {
     row_words: usize,
 }
 
-/// Whether a shader may hold lanes past a triangle: its [`QuadShader::Deferred`] can hold
-/// anything and the draw does not write depth. Otherwise the rasterizer asks for the lanes at
+/// Whether a shader may hold lanes past a triangle: it asks to
+/// ([`QuadShader::ACROSS_TRIANGLES`]), its [`QuadShader::Deferred`] can hold anything and the
+/// draw does not write depth. Otherwise the rasterizer asks for the lanes at
 /// the end of each triangle and keeps no [`HeldPixels`].
 #[inline(always)]
 pub(crate) fn holds_across_triangles<V, S: QuadShader<V>>(writes_depth: bool) -> bool {
-    size_of::<S::Deferred>() != 0 && !writes_depth
+    S::ACROSS_TRIANGLES && size_of::<S::Deferred>() != 0 && !writes_depth
 }
 
 impl HeldPixels {

@@ -715,6 +715,23 @@ pub fn shade_fur_quad<'a>(
     } else {
         0.0
     };
+    let i = batch.len;
+    if i <= BATCH_LANES - 4
+        && let Some(whole) = slots.take_whole()
+    {
+        // The common quad, all four lanes shaded: joins the batch in whole rows.
+        let at = i..i + 4;
+        for (slot, taken) in batch.slots[at.clone()].iter_mut().zip(whole) {
+            *slot = Some(taken);
+        }
+        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
+            lanes[at.clone()].copy_from_slice(quad_lanes);
+        }
+        batch.lod[at.clone()].fill(lod);
+        batch.frac[at].fill(frac);
+        batch.len += 4;
+        return;
+    }
     for lane in 0..4 {
         if lanes & (1 << lane) == 0 {
             continue;
@@ -1118,6 +1135,8 @@ pub struct FurShader<'a> {
 
 impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     type Deferred = FurBatch<'a>;
+    /// A batch's lanes lie in one triangle ([`BatchVaryings`]).
+    const ACROSS_TRIANGLES: bool = false;
 
     #[inline(always)]
     fn shade_quad(
