@@ -648,9 +648,10 @@ pub fn shade_fur(
 
 /// Shades the lanes of one quad ([`QuadSlots::lanes`]): lane by lane the same bits as
 /// [`shade_fur`]. The quad's level of detail (its coarse derivatives) and the mip levels it
-/// picks are found here, once; its shaded lanes, interpolated whole, then join `batch`, which
-/// runs the whole stage on [`BATCH_LANES`] lanes at a time ([`FurBatch`]). Lanes of quads at
-/// other mip levels go to a fresh batch: the one held is run first.
+/// picks are found here, once; its shaded lanes (their slots and interpolation weights) then
+/// join `batch`, which runs the whole stage on [`BATCH_LANES`] lanes at a time ([`FurBatch`]).
+/// Lanes of quads at other mip levels or of another triangle go to a fresh batch: the one held
+/// is run first.
 ///
 /// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
 /// the rasterizer's tile replay.
@@ -758,8 +759,10 @@ pub const BATCH_LANES: usize = 8;
 /// on [`BATCH_LANES`] lanes at once in structure-of-arrays form: the texture pair's footprints,
 /// texel conversion and filter ([`TrilinearPair::sample_lanes`]), the alpha test as a lane
 /// mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
-/// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch read
-/// one pair of mip levels and one shadow level (each keeps its own blend fraction); what is
+/// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
+/// in one triangle, whose varyings it interpolates a component of all lanes at a time
+/// ([`BatchVaryings`]), and read one pair of mip levels and one shadow level (each keeps its
+/// own blend fraction); what is
 /// rare (the burn, the painted length, density and colour maps, differently shaped maps, the
 /// debug views) runs lane by lane inside the batch with the scalar terms.
 ///
