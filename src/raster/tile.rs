@@ -773,6 +773,29 @@ pub fn blend(mode: BlendMode, src: Vec4, dst: Vec4) -> Vec4 {
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_whole_quad_gives_the_slots_of_its_lanes_one_by_one() {
+        let quad = |open| QuadSlots {
+            origin: 130,
+            row: 64,
+            depth: [0.25, 0.5, 0.75, 1.0],
+            open,
+        };
+        let mut whole = quad(0b1111);
+        let taken = whole.take_whole().expect("all four lanes open");
+        let mut one_by_one = quad(0b1111);
+        for (lane, slot) in taken.iter().enumerate() {
+            let single = one_by_one.take(lane).expect("open");
+            assert_eq!((slot.index, slot.depth), (single.index, single.depth));
+        }
+        assert_eq!(whole.lanes(), 0);
+        assert!(whole.take_whole().is_none());
+        // A quad with a lane closed gives nothing whole and keeps its lanes.
+        let mut partial = quad(0b1011);
+        assert!(partial.take_whole().is_none());
+        assert_eq!(partial.lanes(), 0b1011);
+    }
+
     /// The span is exactly the quads no edge rejects, for random edges of every sign.
     #[test]
     fn quad_span_is_the_quads_no_edge_rejects() {

@@ -41,11 +41,13 @@ use glam::{Vec2, Vec3, Vec4};
 pub const ALPHA_DISCARD: f32 = shading::SHADOW_OPAQUE_ALPHA;
 
 /// What the vertex stage hands the fur fragment stage: what every shaded fragment reads,
-/// then what only lit fragments read, so that the fragment stage interpolates each part only
-/// for the lanes that need it ([`Quad::field`]).
+/// then what only lit fragments read, so that the scalar twin interpolates each part only for
+/// the fragments that need it ([`Quad::field`]); the quad stage interpolates a component of a
+/// batch's lanes at a time, when read ([`BatchVaryings`]).
 ///
 /// `repr(C)` of `f32` fields only (bytemuck's `Pod` checks that there is no padding), so that
-/// interpolation can run over all components as one array.
+/// interpolation can run over all components as one array, and a batch can address a field
+/// by its first component's index.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FurVaryings {
@@ -762,9 +764,9 @@ pub const BATCH_LANES: usize = 8;
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
 /// in one triangle, whose varyings it interpolates a component of all lanes at a time
 /// ([`BatchVaryings`]), and read one pair of mip levels and one shadow level (each keeps its
-/// own blend fraction); what is
-/// rare (the burn, the painted length, density and colour maps, differently shaped maps, the
-/// debug views) runs lane by lane inside the batch with the scalar terms.
+/// own blend fraction); what is rare (the burn, the painted length, density and colour maps,
+/// differently shaped maps, the debug views) runs lane by lane inside the batch with the
+/// scalar terms.
 ///
 /// Lane by lane the same bits as [`shade_fur`]: every step is the scalar twin's operations on
 /// each lane, and a lane's result depends on nothing else in the batch. Lanes discarded on the
@@ -822,7 +824,7 @@ impl BatchVaryings {
 
     /// The 3-vector from component `c` on, of every lane.
     #[inline(always)]
-    fn vec3(&self, c: usize) -> Vec3x8 {
+    fn vec3(&self, c: usize) -> Vec3xN<BATCH_LANES> {
         Vec3xN {
             x: self.component(c),
             y: self.component(c + 1),
