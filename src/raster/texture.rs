@@ -257,7 +257,9 @@ impl Texture {
         } else {
             lod.clamp(0.0, max)
         };
-        let k = lod as usize;
+        // Through `u32`: the same value (`lod` is in [0, max]) with one conversion instruction,
+        // where a float-to-`usize` cast needs a fix-up for values past 2⁶³.
+        let k = lod as u32 as usize;
         (k, (k + 1).min(self.levels.len() - 1), lod - k as f32)
     }
 
@@ -305,8 +307,9 @@ impl Texture {
         } else {
             lod.clamp(0.0, max)
         };
-        // lod is in [0, max]: adding 0.5 and truncating rounds half up.
-        (lod + 0.5) as usize
+        // lod is in [0, max]: adding 0.5 and truncating rounds half up (through `u32`, as in
+        // `trilinear_indices`).
+        (lod + 0.5) as u32 as usize
     }
 
     /// Number of mip levels (1 for a 1×1 texture).
