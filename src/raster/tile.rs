@@ -311,11 +311,6 @@ pub trait QuadShader<V>: Send + Sync {
     /// it is empty again after each [`QuadShader::finish`].
     type Deferred: Default;
 
-    /// Whether the shader's batches may hold lanes of several triangles (where the draw writes
-    /// no depth). `false`: the rasterizer calls [`QuadShader::finish`] after each triangle
-    /// and keeps no bit per pixel.
-    const ACROSS_TRIANGLES: bool = true;
-
     /// Shades the lanes of `slots` ([`QuadSlots::lanes`]) and writes the colour of each lane
     /// it keeps to the lane's slot, now or by [`QuadShader::finish`]; a lane never
     /// written is discarded.
@@ -391,13 +386,12 @@ pub(crate) struct HeldPixels {
     row_words: usize,
 }
 
-/// Whether a shader may hold lanes past a triangle: it asks to
-/// ([`QuadShader::ACROSS_TRIANGLES`]), its [`QuadShader::Deferred`] can hold anything and the
-/// draw does not write depth. Otherwise the rasterizer asks for the lanes at
+/// Whether a shader may hold lanes past a triangle: its [`QuadShader::Deferred`] can hold
+/// anything and the draw does not write depth. Otherwise the rasterizer asks for the lanes at
 /// the end of each triangle and keeps no [`HeldPixels`].
 #[inline(always)]
 pub(crate) fn holds_across_triangles<V, S: QuadShader<V>>(writes_depth: bool) -> bool {
-    S::ACROSS_TRIANGLES && size_of::<S::Deferred>() != 0 && !writes_depth
+    size_of::<S::Deferred>() != 0 && !writes_depth
 }
 
 impl HeldPixels {

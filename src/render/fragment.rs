@@ -1140,8 +1140,6 @@ pub struct FurShader<'a> {
 
 impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     type Deferred = FurBatch<'a>;
-    /// A batch's lanes lie in one triangle ([`BatchVaryings`]).
-    const ACROSS_TRIANGLES: bool = false;
 
     #[inline(always)]
     fn shade_quad(
