@@ -184,7 +184,7 @@ fn a_partial_tolerance_checks_only_what_it_names_and_says_so() {
     assert_eq!(json["checked"].as_array().map(Vec::len), Some(4), "{json}");
 }
 
-/// The figures of one row of the README's GPU tolerance table, as a comparison judged by `t`.
+/// The figures of one row of the GPU tolerance table (docs/src/gpu.md), as a comparison judged by `t`.
 fn judged_row(row: &str, t: &pelage::compare::Tolerance) -> Vec<String> {
     let cells: Vec<&str> = row.trim_matches('|').split('|').map(str::trim).collect();
     assert_eq!(cells.len(), 7, "{row}");
@@ -231,10 +231,13 @@ fn judged_row(row: &str, t: &pelage::compare::Tolerance) -> Vec<String> {
 
 #[test]
 fn the_readmes_first_compare_example_catches_every_measured_mutant() {
-    // The README's first `pelage compare` command must pass every honest GPU scene of its
-    // tolerance table and fail every perturbed shader (rows in italics: Banks 4.6 and the rest).
+    // The README's first `pelage compare` command must pass every honest GPU scene of the
+    // tolerance tables in the book's chapter "Checking a GPU renderer" and fail every perturbed
+    // shader (rows in italics: Banks 4.6 and the rest).
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).expect("README");
+    let chapter = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/src/gpu.md"))
+        .expect("docs/src/gpu.md");
     let example = readme
         .lines()
         .find(|l| l.trim_start().starts_with("pelage compare "))
@@ -252,7 +255,7 @@ fn the_readmes_first_compare_example_catches_every_measured_mutant() {
     );
     // Vulkan's table, then GL's: both APIs are held to the same tier.
     for header in ["| scene | exact pixels", "| scene (GL) | exact pixels"] {
-        let table: Vec<&str> = readme
+        let table: Vec<&str> = chapter
             .lines()
             .skip_while(|l| !l.starts_with(header))
             .skip(2)

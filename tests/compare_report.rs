@@ -256,7 +256,10 @@ fn the_report_page_loads_in_headless_chromium_with_its_rows_and_images() {
             std::env::var("PELAGE_REQUIRE_CHROMIUM").as_deref() != Ok("1"),
             "PELAGE_REQUIRE_CHROMIUM=1 but no chromium: apt-get install chromium"
         );
-        eprintln!("note: chromium is not installed; the report page was not checked in it");
+        eprintln!(
+            "SKIPPED: {} needs chromium (run .ci/setup)",
+            std::thread::current().name().unwrap_or("a test")
+        );
         return;
     };
     let dir = scratch("chromium");

@@ -152,7 +152,10 @@ fn validator() -> Option<PathBuf> {
             folder.join("node_modules/gltf-validator").display(),
             folder.display()
         );
-        eprintln!("node or gltf-validator not installed: skipped");
+        eprintln!(
+            "SKIPPED: {} needs node and the npm gltf-validator (run .ci/setup)",
+            std::thread::current().name().unwrap_or("a test")
+        );
         return None;
     }
     Some(folder)

@@ -45,7 +45,10 @@ fn have(tool: &str, version_flag: &str) -> bool {
             std::env::var("PELAGE_REQUIRE_VALIDATORS").as_deref() != Ok("1"),
             "{tool} is required (PELAGE_REQUIRE_VALIDATORS=1) but does not run: apt-get install glslang-tools spirv-tools"
         );
-        eprintln!("{tool} not installed: skipped");
+        eprintln!(
+            "SKIPPED: {} needs {tool} (run .ci/setup)",
+            std::thread::current().name().unwrap_or("a test")
+        );
     }
     found
 }

@@ -305,7 +305,10 @@ fn the_gnu_parallel_recipe_gives_the_whole_sweep() {
             std::env::var("PELAGE_REQUIRE_PARALLEL").as_deref() != Ok("1"),
             "PELAGE_REQUIRE_PARALLEL=1 but GNU parallel is missing: apt-get install parallel"
         );
-        eprintln!("note: GNU parallel is not installed; the recipe was not run");
+        eprintln!(
+            "SKIPPED: {} needs GNU parallel (run .ci/setup)",
+            std::thread::current().name().unwrap_or("a test")
+        );
         return;
     }
     let dir = scratch("parallel");

@@ -122,7 +122,10 @@ mod window {
                 std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() != Ok("1"),
                 "PELAGE_REQUIRE_DISPLAY=1 but DISPLAY is not set: run under xvfb-run"
             );
-            eprintln!("no display: the window test is skipped (run it under xvfb-run)");
+            eprintln!(
+                "SKIPPED: {} needs a display (run it under xvfb-run; .ci/setup installs xvfb)",
+                std::thread::current().name().unwrap_or("a test")
+            );
         }
         display
     }
@@ -315,7 +318,10 @@ mod window {
                 std::env::var("PELAGE_REQUIRE_DISPLAY").as_deref() != Ok("1"),
                 "PELAGE_REQUIRE_DISPLAY=1 but xdotool is missing: apt-get install xdotool"
             );
-            eprintln!("no xdotool: the key tap test is skipped");
+            eprintln!(
+                "SKIPPED: {} needs xdotool (run .ci/setup)",
+                std::thread::current().name().unwrap_or("a test")
+            );
             return;
         }
         let dir = scratch("tap");
