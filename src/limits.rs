@@ -38,14 +38,8 @@ pub const DEFAULT_MAX_BAKE_WORK: u64 = 20_000_000_000;
 /// (the default scene, 3.3·10⁸ units, draws in 1.6 s of CPU time on one core).
 pub const DEFAULT_MAX_DRAW_WORK: u64 = 100_000_000_000;
 
-/// Largest OBJ file accepted, bytes (checked before the file is read).
-pub const MAX_OBJ_BYTES: u64 = 2 << 30;
-
-/// Largest triangle count an OBJ file may have (after fan triangulation of its polygons).
-pub const MAX_OBJ_TRIANGLES: u64 = 32_000_000;
-
-/// Largest MTL file accepted, bytes.
-pub const MAX_MTL_BYTES: u64 = 64 << 20;
+/// The OBJ loader's file limits, defined beside the loader that enforces them.
+pub use crate::mesh::obj::{MAX_MTL_BYTES, MAX_OBJ_BYTES, MAX_OBJ_TRIANGLES};
 
 /// Most animation frames one render may ask for.
 pub const MAX_FRAMES: u32 = 100_000;
@@ -73,6 +67,10 @@ const EXPORT_SKIN_VERTEX_BYTES: u64 = 12 + 12 + 16 + 8 + 12 + 12 + 12;
 /// floating point, FLIP's filtered colour and feature planes, its error map and the heat maps
 /// (87 measured at 1024² and 2048², rounded up for what the metrics may add).
 pub const COMPARE_BYTES_PER_PIXEL: u64 = 112;
+/// A glTF vertex while loading and posing: its attributes as read (position, normal, uv: 32
+/// bytes), the bind vertex (92), its influences (32) and the posed copy (92).
+const GLTF_BYTES_PER_VERTEX: u64 = 32 + 92 + 32 + 92;
+
 /// Set-up triangles and their draws' vertices are kept until this many are pending (the
 /// rasterizer's auto-flush).
 const PENDING_ENTRIES: u64 = 1 << 20;
@@ -86,6 +84,9 @@ pub struct MeshSize {
     pub vertices: u64,
     /// For OBJ files, the `v`, `vt` and `vn` statements read (0 for procedural meshes).
     pub file_attributes: u64,
+    /// For glTF models, the bytes held while loading and posing: the file, its buffers, the
+    /// decoded animation keys and the bind mesh with its influences (0 otherwise).
+    pub model_bytes: u64,
 }
 
 /// The mesh size a scene asks for: exact for procedural meshes (from their segment counts), a
@@ -98,6 +99,7 @@ pub fn mesh_size(scene: &Scene) -> Result<MeshSize, MeshError> {
             triangles: 2 * a * b,
             vertices: (a + 1) * (b + 2),
             file_attributes: 0,
+            model_bytes: 0,
         }
     };
     Ok(match m.kind {
@@ -120,6 +122,23 @@ pub fn mesh_size(scene: &Scene) -> Result<MeshSize, MeshError> {
                 triangles: summary.triangles,
                 vertices: 3 * summary.triangles,
                 file_attributes: summary.positions + summary.texcoords + summary.normals,
+                model_bytes: 0,
+            }
+        }
+        MeshKind::Gltf => {
+            let path = scene.base_dir.join(m.path.clone().unwrap_or_default());
+            let summary = mesh::gltf::scan(&path)?;
+            // The file twice (read, and its binary chunk copied), each animation key as a
+            // 16-byte value, and per vertex the bind vertex, its influences and its posed copy.
+            MeshSize {
+                triangles: summary.triangles,
+                vertices: summary.vertices,
+                file_attributes: 0,
+                model_bytes: summary
+                    .file_bytes
+                    .saturating_mul(2)
+                    .saturating_add(summary.animation_keys.saturating_mul(16))
+                    .saturating_add(summary.vertices.saturating_mul(GLTF_BYTES_PER_VERTEX)),
             }
         }
     })
@@ -273,6 +292,9 @@ pub fn estimate_memory(scene: &Scene, mesh: MeshSize, work: &Workload) -> Memory
             // The largest texture level copied out for encoding, and its PNG.
             .saturating_add(product(&[res, res, 2 * 4])),
         ));
+    }
+    if mesh.model_bytes > 0 {
+        parts.push(("reading and posing the glTF model", mesh.model_bytes));
     }
     if mesh.file_attributes > 0 || scene.mesh.kind == MeshKind::Obj {
         parts.push((
@@ -610,6 +632,7 @@ mod tests {
             triangles: 1000,
             vertices: 600,
             file_attributes: 0,
+            model_bytes: 0,
         };
         // 1000 pixels × 10 layers × 2, one evaluation each; 1000 triangles × 11 × 32.
         assert_eq!(draw_work(&plain, size), 20_000 + 352_000);

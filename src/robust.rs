@@ -36,6 +36,7 @@ pub fn scene_text(text: &str) {
             triangles: 1,
             vertices: 3,
             file_attributes: 0,
+            model_bytes: 0,
         },
     };
     let estimate = limits::estimate_memory(&scene, size, &Workload::default());

@@ -359,8 +359,16 @@ fn snippet(section: &str, kind: Option<&str>, lines: &str) -> String {
     if section == "motion" && !lines.starts_with("path") {
         text.push_str("path = [[0.0, 0.0, 0.0, 0.0]]\n");
     }
+    // A glTF mesh needs its path (the file is not read while parsing).
+    if section == "mesh" && kind == Some("gltf") && !lines.starts_with("path") {
+        text.push_str("path = \"model.glb\"\n");
+    }
     text.push_str(lines);
     text.push('\n');
+    // `[animation]` plays a glTF model's clip.
+    if section == "animation" {
+        text.push_str("[mesh]\nkind = \"gltf\"\npath = \"model.glb\"\n");
+    }
     text
 }
 
@@ -431,36 +439,35 @@ fn every_documented_scene_key_has_the_parsers_default_range_and_choices() {
         let set = |value: &str| parse(&snippet(&section, kind, &format!("{name} = {value}")));
         let at = format!("{} (docs/src/scenes.md)", row.key);
         // A default written as one value: setting it changes nothing.
-        if let [default] = ticked(&row.default)[..] {
-            if row.default == format!("`{default}`") {
-                let base =
-                    parse(&snippet(&section, kind, "")).unwrap_or_else(|e| panic!("{at}: {e}"));
-                let given = set(default).unwrap_or_else(|e| panic!("{at} = {default}: {e}"));
-                assert_eq!(given, base, "{at}: the default is not {default}");
-                checked += 1;
-            }
+        if let [default] = ticked(&row.default)[..]
+            && row.default == format!("`{default}`")
+        {
+            let base = parse(&snippet(&section, kind, "")).unwrap_or_else(|e| panic!("{at}: {e}"));
+            let given = set(default).unwrap_or_else(|e| panic!("{at} = {default}: {e}"));
+            assert_eq!(given, base, "{at}: the default is not {default}");
+            checked += 1;
         }
         // A range written as `a..=b`: both ends accepted, beyond them refused.
-        if let [range] = ticked(&row.range)[..] {
-            if let Some((lo, hi)) = range.split_once("..=") {
-                assert_eq!(row.range, format!("`{range}`"), "{at}");
-                let float = lo.contains('.') || hi.contains('.');
-                let step = |v: &str, sign: f64| -> String {
-                    let x: f64 = v.parse().unwrap_or_else(|_| panic!("{at}: {v}"));
-                    if float {
-                        format!("{:?}", x + sign * x.abs().max(1.0))
-                    } else {
-                        format!("{}", x as i64 + sign as i64)
-                    }
-                };
-                for v in [lo, hi] {
-                    set(v).unwrap_or_else(|e| panic!("{at} = {v} is refused: {e}"));
+        if let [range] = ticked(&row.range)[..]
+            && let Some((lo, hi)) = range.split_once("..=")
+        {
+            assert_eq!(row.range, format!("`{range}`"), "{at}");
+            let float = lo.contains('.') || hi.contains('.');
+            let step = |v: &str, sign: f64| -> String {
+                let x: f64 = v.parse().unwrap_or_else(|_| panic!("{at}: {v}"));
+                if float {
+                    format!("{:?}", x + sign * x.abs().max(1.0))
+                } else {
+                    format!("{}", x as i64 + sign as i64)
                 }
-                for v in [step(lo, -1.0), step(hi, 1.0)] {
-                    assert!(set(&v).is_err(), "{at} = {v} is accepted");
-                }
-                checked += 1;
+            };
+            for v in [lo, hi] {
+                set(v).unwrap_or_else(|e| panic!("{at} = {v} is refused: {e}"));
             }
+            for v in [step(lo, -1.0), step(hi, 1.0)] {
+                assert!(set(&v).is_err(), "{at} = {v} is accepted");
+            }
+            checked += 1;
         }
         // Choices written as quoted strings: exactly the parser's.
         let choices: BTreeSet<String> = ticked(&row.range)

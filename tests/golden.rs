@@ -219,6 +219,8 @@ golden! {
     combed => "combed",
     gravity => "gravity",
     lod_flyaway => "lod-flyaway" at times [0.0, 0.8, 2.0, 4.0],
+    fox => "fox" at times [0.0, 0.4, 0.8],
+    tail => "tail" at times [0.0, 0.5, 1.25],
 }
 
 #[test]

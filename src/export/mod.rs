@@ -788,7 +788,7 @@ fn gltf(
     fin: Option<&LayerTextures>,
 ) -> (gj::Root, Vec<u8>) {
     use gj::mesh::Semantic;
-    let mesh = prepared.mesh();
+    let mesh = prepared.mesh_at(time);
     let v = &mesh.vertices;
     let s = prepared.scene();
     let mut b = GltfBuilder::default();

@@ -380,7 +380,7 @@ impl GpuContext {
         let device = &self.device;
         let s = prepared.scene();
         let (width, height) = (s.image.width, s.image.height);
-        let mesh = prepared.mesh();
+        let mesh = prepared.mesh_at(time);
         if mesh.vertices.is_empty() || mesh.indices.is_empty() {
             return Err(GpuError::Scene("the mesh has no triangles".into()));
         }

@@ -1,5 +1,6 @@
-//! Meshes: procedural torus, sphere, cylinder and leg, OBJ loading, tangent frames (thesis
-//! eq. 3.1–3.3), shell extrusion (thesis 3.1.4) and fin edges (thesis 3.1.2.2).
+//! Meshes: procedural torus, sphere, cylinder and leg, OBJ and glTF loading, skinning and
+//! animation clips, tangent frames (thesis eq. 3.1–3.3), shell extrusion (thesis 3.1.4) and
+//! fin edges (thesis 3.1.2.2).
 //!
 //! Conventions shared by every mesh built here:
 //! - front faces are counter-clockwise seen from outside: `(p1 − p0) × (p2 − p0)` points out;
@@ -10,11 +11,15 @@
 //!   position*: every vertex with the same position gets the same normal, so shells extruded
 //!   along the normals never crack open at UV seams (see [`frame`]).
 
+pub mod animation;
 pub mod fins;
 pub mod frame;
+pub mod gltf;
 pub mod obj;
 pub mod procedural;
+pub mod rig;
 pub mod shells;
+pub mod skin;
 
 use std::path::PathBuf;
 
@@ -137,6 +142,9 @@ pub enum MeshError {
         /// The limit.
         limit: u64,
     },
+    /// A glTF file that cannot be used (names the file and the JSON location).
+    #[error(transparent)]
+    Gltf(#[from] gltf::GltfError),
     /// Positions and texture coordinates have different lengths.
     #[error("{positions} positions but {uvs} texture coordinates")]
     AttributeLength {

@@ -11,9 +11,8 @@
 //!   [`MeshError::Syntax`] naming the file and line. The other statements of the OBJ
 //!   specification are ignored, as are points (`p`) and polylines (`l`) of two vertices; any
 //!   other first word is an error (the file is not an OBJ); like tobj, a polyline of three or more
-//!   vertices is a polygon. The file must be a regular file of at most
-//!   [`MAX_OBJ_BYTES`](crate::limits::MAX_OBJ_BYTES) with at most
-//!   [`MAX_OBJ_TRIANGLES`](crate::limits::MAX_OBJ_TRIANGLES) triangles.
+//!   vertices is a polygon. The file must be a regular file of at most [`MAX_OBJ_BYTES`] with at
+//!   most [`MAX_OBJ_TRIANGLES`] triangles.
 //! - **Materials are not used.** A material library named by `mtllib` that is missing only adds
 //!   a warning; one that exists is checked line by line like the OBJ (`Ka`/`Kd`/`Ks`/`Ke` 3
 //!   numbers, `Ns`/`Ni`/`d` a number, `illum` an integer, `newmtl` and `map_*` a name) and a
@@ -34,6 +33,19 @@ use glam::{Vec2, Vec3};
 
 use super::{Mesh, MeshError};
 
+// The file-size limits live here, with the loader that enforces them, rather than in
+// `crate::limits` (which re-exports them): `limits` estimates a scene's cost from the mesh
+// module, so the mesh module must not reach back into it.
+
+/// Largest OBJ file accepted, bytes (checked before the file is read).
+pub const MAX_OBJ_BYTES: u64 = 2 << 30;
+
+/// Largest triangle count an OBJ file may have (after fan triangulation of its polygons).
+pub const MAX_OBJ_TRIANGLES: u64 = 32_000_000;
+
+/// Largest MTL file accepted, bytes.
+pub const MAX_MTL_BYTES: u64 = 64 << 20;
+
 /// A mesh read from a file, with what was noticed on the way.
 #[derive(Clone, Debug)]
 pub struct LoadedMesh {
@@ -51,12 +63,8 @@ pub struct LoadedMesh {
 pub fn load_obj(path: &Path) -> Result<LoadedMesh, MeshError> {
     let summary = scan_obj(path)?;
     // Checked again: the scan's check does not hold for a file swapped since.
-    let file = open_checked(path, crate::limits::MAX_OBJ_BYTES, "file size in bytes")?;
-    load_checked(
-        path,
-        &mut BufReader::new(file.take(crate::limits::MAX_OBJ_BYTES)),
-        summary,
-    )
+    let file = open_checked(path, MAX_OBJ_BYTES, "file size in bytes")?;
+    load_checked(path, &mut BufReader::new(file.take(MAX_OBJ_BYTES)), summary)
 }
 
 /// Loads OBJ text held in memory, as [`load_obj`] loads a file; `name` names it in errors.
@@ -168,7 +176,7 @@ fn load_checked(
 /// The error for a non-finite position at merged index `vertex`: re-reads the file to find the
 /// offending `v` line (the merged index is not the file's numbering once tobj re-indexes).
 fn non_finite(path: &Path, vertex: usize, p: Vec3) -> MeshError {
-    let text = crate::input::read_text(path, crate::limits::MAX_OBJ_BYTES, "OBJ file");
+    let text = crate::input::read_text(path, MAX_OBJ_BYTES, "OBJ file");
     let found = text.ok().and_then(|text| {
         let mut number = 0;
         for (line, l) in text.lines().enumerate() {
@@ -391,7 +399,7 @@ fn face_index(field: &str, count: u64, kind: &str, corner: &str) -> Result<Optio
 /// Material libraries it names are checked too ([`MeshError::Syntax`] naming the MTL file);
 /// a missing one is a warning.
 pub fn scan_obj(path: &Path) -> Result<ObjSummary, MeshError> {
-    let file = open_checked(path, crate::limits::MAX_OBJ_BYTES, "file size in bytes")?;
+    let file = open_checked(path, MAX_OBJ_BYTES, "file size in bytes")?;
     scan_obj_reader(path, file, Some(path.parent().unwrap_or(Path::new(""))))
 }
 
@@ -546,12 +554,12 @@ pub fn scan_obj_reader(
             });
         }
     }
-    if s.triangles > crate::limits::MAX_OBJ_TRIANGLES {
+    if s.triangles > MAX_OBJ_TRIANGLES {
         return Err(MeshError::TooLarge {
             path: path.to_path_buf(),
             what: "triangles",
             value: s.triangles,
-            limit: crate::limits::MAX_OBJ_TRIANGLES,
+            limit: MAX_OBJ_TRIANGLES,
         });
     }
     if s.triangles == 0 {
@@ -590,7 +598,7 @@ pub fn scan_obj_reader(
 
 /// Checks every line of an MTL file (module docs). The materials themselves are not used.
 pub fn scan_mtl(path: &Path) -> Result<(), MeshError> {
-    let file = open_checked(path, crate::limits::MAX_MTL_BYTES, "file size in bytes")?;
+    let file = open_checked(path, MAX_MTL_BYTES, "file size in bytes")?;
     for_each_line(path, file, |_, text| {
         let mut words = text.split_whitespace();
         let Some(key) = words.next() else {
@@ -631,6 +639,16 @@ fn box_projection(
     positions: &[Vec3],
     indices: &[[u32; 3]],
 ) -> (Vec<Vec3>, Vec<Vec2>, Vec<[u32; 3]>) {
+    let (p, uv, idx, _) = box_projection_with_origins(positions, indices);
+    (p, uv, idx)
+}
+
+/// [`box_projection`], also giving each new vertex's original index (so per-vertex data such
+/// as a glTF skin's influences can follow the duplicated vertices).
+pub(crate) fn box_projection_with_origins(
+    positions: &[Vec3],
+    indices: &[[u32; 3]],
+) -> (Vec<Vec3>, Vec<Vec2>, Vec<[u32; 3]>, Vec<u32>) {
     let min = positions.iter().fold(Vec3::INFINITY, |m, &p| m.min(p));
     let max = positions.iter().fold(Vec3::NEG_INFINITY, |m, &p| m.max(p));
     let extent = (max - min).max_element();
@@ -655,6 +673,7 @@ fn box_projection(
     };
     let mut map: BTreeMap<(u32, u8), u32> = BTreeMap::new();
     let (mut out_p, mut out_uv, mut out_i) = (Vec::new(), Vec::new(), Vec::new());
+    let mut origins = Vec::new();
     for tri in indices {
         let [a, b, c] = tri.map(|i| positions[i as usize]);
         let n = (b - a).cross(c - a);
@@ -673,11 +692,12 @@ fn box_projection(
                 let p = positions[i as usize];
                 out_p.push(p);
                 out_uv.push(project(axis, p));
+                origins.push(i);
                 (out_p.len() - 1) as u32
             })
         }));
     }
-    (out_p, out_uv, out_i)
+    (out_p, out_uv, out_i, origins)
 }
 
 #[cfg(test)]

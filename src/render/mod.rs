@@ -142,6 +142,17 @@ pub struct RenderedImage {
     pub warnings: Vec<String>,
 }
 
+/// What a GPU needs to skin a glTF model itself (see [`PreparedScene::skinning_at`]).
+#[derive(Clone, Debug)]
+pub struct Skinning {
+    /// Column-major 4×4 palette matrices.
+    pub palette: Vec<[f32; 16]>,
+    /// Per bind vertex, palette indices and normalised weights.
+    pub influences: Vec<mesh::skin::Influences>,
+    /// The bind mesh (positions, normals, derivatives before posing).
+    pub bind: Mesh,
+}
+
 /// A scene with its mesh built and its fur baked, ready to draw frames.
 pub struct PreparedScene {
     scene: Scene,
@@ -158,6 +169,42 @@ pub struct PreparedScene {
     bounds: (Vec3, f32),
     /// The order level of detail adds layers in.
     lod_order: Vec<u32>,
+    /// A glTF model's rig and clip: the mesh is posed again for every frame.
+    character: Option<Posing>,
+}
+
+/// What poses a glTF model per frame (see [`crate::mesh::skin`]).
+struct Posing {
+    /// The vertices as the file binds them.
+    bind: Mesh,
+    /// Hierarchy, palette, influences.
+    rig: mesh::skin::Rig,
+    /// The clip `[animation]` plays, with its speed and looping; `None`: the rest pose.
+    clip: Option<(mesh::animation::Clip, f32, bool)>,
+    /// How far the skin is moved along its normals (`fur.skin_inset`).
+    inset: f32,
+}
+
+impl Posing {
+    /// The palette at scene time `time`.
+    fn palette_at(&self, time: f32) -> Vec<mesh::skin::Affine> {
+        match &self.clip {
+            Some((clip, speed, looping)) => {
+                let t = clip.clip_time(time, *speed, *looping);
+                self.rig.palette(&clip.sample(&self.rig.skeleton.rest, t))
+            }
+            None => self.rig.rest_palette(),
+        }
+    }
+
+    /// The posed mesh at scene time `time`.
+    fn mesh_at(&self, time: f32) -> Mesh {
+        let palette = self.palette_at(time);
+        inset(
+            mesh::skin::pose(&self.bind, &self.rig.influences, &palette),
+            self.inset,
+        )
+    }
 }
 
 /// What bends the fur in one frame: the wind (thesis 3.3) and the lean of gravity, the object's
@@ -387,7 +434,15 @@ fn scaled(mut mesh: Mesh, scale: f32) -> Mesh {
     mesh
 }
 
-fn build_mesh(scene: &Scene) -> Result<(Mesh, Vec<String>), RenderError> {
+/// The mesh at rest, its warnings, and for a glTF model what poses it per frame.
+type BuiltMesh = (
+    Mesh,
+    Vec<String>,
+    Option<Posing>,
+    Option<mesh::gltf::BaseColour>,
+);
+
+fn build_mesh(scene: &Scene) -> Result<BuiltMesh, RenderError> {
     let m = &scene.mesh;
     let mesh = match m.kind {
         MeshKind::Torus => {
@@ -399,10 +454,59 @@ fn build_mesh(scene: &Scene) -> Result<(Mesh, Vec<String>), RenderError> {
         MeshKind::Obj => {
             let path = m.path.clone().unwrap_or_default();
             let loaded = mesh::obj::load_obj(&scene.base_dir.join(path))?;
-            return Ok((scaled(loaded.mesh, m.scale), loaded.warnings));
+            let mesh = inset(scaled(loaded.mesh, m.scale), scene.fur.skin_inset());
+            return Ok((mesh, loaded.warnings, None, None));
+        }
+        MeshKind::Gltf => {
+            let path = scene.base_dir.join(m.path.clone().unwrap_or_default());
+            let loaded = mesh::gltf::load(&path, m.node.as_deref(), m.scale)
+                .map_err(mesh::MeshError::from)?;
+            let clip = match &scene.animation {
+                Some(a) => {
+                    let index = loaded
+                        .clip_index(&a.choice(), &path)
+                        .map_err(mesh::MeshError::from)?;
+                    Some((loaded.clips[index].clone(), a.speed, a.looping))
+                }
+                None => None,
+            };
+            let posing = Posing {
+                bind: loaded.bind,
+                rig: loaded.rig,
+                clip,
+                inset: scene.fur.skin_inset(),
+            };
+            // The rest pose: what every time-independent quantity (the fur tile's size, the
+            // bake) is measured on, so that a frame is the same whatever time was prepared.
+            let rest = inset(
+                mesh::skin::pose(
+                    &posing.bind,
+                    &posing.rig.influences,
+                    &posing.rig.rest_palette(),
+                ),
+                posing.inset,
+            );
+            return Ok((rest, loaded.warnings, Some(posing), loaded.base_colour));
         }
     };
-    Ok((mesh, Vec::new()))
+    Ok((inset(mesh, scene.fur.skin_inset()), Vec::new(), None, None))
+}
+
+/// The base colour as a colour map: each texel times the factor, rounded to the nearest byte
+/// (`round(b·f)` in f32, clamped to 0..=255); a factor of 1 keeps the bytes.
+fn base_colour_map(colour: &mesh::gltf::BaseColour) -> Result<Texture, RasterError> {
+    let texels = colour
+        .texels
+        .iter()
+        .map(|t| {
+            let mut out = *t;
+            for (o, f) in out.iter_mut().zip(colour.factor) {
+                *o = (f32::from(*o) * f).round().clamp(0.0, 255.0) as u8;
+            }
+            out
+        })
+        .collect();
+    Texture::from_rgba8(colour.width, colour.height, texels)
 }
 
 fn fur_params(scene: &Scene, tile: Vec2) -> FurParams {
@@ -435,8 +539,7 @@ impl PreparedScene {
     /// Builds the mesh and bakes the fur (the thesis's start-up).
     pub fn new(scene: &Scene) -> Result<Self, RenderError> {
         crate::raster::framebuffer::check_size(scene.image.width, scene.image.height)?;
-        let (mesh, warnings) = build_mesh(scene)?;
-        let mesh = inset(mesh, scene.fur.skin_inset());
+        let (mesh, warnings, character, base_colour) = build_mesh(scene)?;
         let radius = mesh
             .vertices
             .iter()
@@ -446,7 +549,23 @@ impl PreparedScene {
         check_stripes(scene, radius)?;
         let tile = tile_world_size(&mesh, scene.fur.texture_repeat);
         let params = fur_params(scene, tile);
-        let maps = SurfaceMaps::load(&scene.maps, &scene.base_dir)?;
+        let mut maps = SurfaceMaps::load(&scene.maps, &scene.base_dir)?;
+        if scene.fur.colour_from_mesh {
+            let Some(colour) = &base_colour else {
+                return Err(RenderError::Mesh(mesh::MeshError::Gltf(
+                    mesh::gltf::GltfError {
+                        file: scene
+                            .base_dir
+                            .join(scene.mesh.path.clone().unwrap_or_default()),
+                        pointer: None,
+                        message:
+                            "fur.colour_from_mesh: the model's material has no base-colour texture"
+                                .into(),
+                    },
+                )));
+            };
+            maps.colour = Some(base_colour_map(colour)?);
+        }
         let strands = fur::generate_strands(&params, scene.seed)?;
         let baked = if maps.density.is_some() {
             fur::bake_shells_with_density(&params, &strands, scene.seed)?
@@ -496,6 +615,7 @@ impl PreparedScene {
             tile_world_size: tile,
             lod_order: crate::shading::lod_layer_order(n),
             maps,
+            character,
         })
     }
 
@@ -504,9 +624,35 @@ impl PreparedScene {
         &self.scene
     }
 
-    /// The mesh carrying the fur.
+    /// The mesh carrying the fur, at rest (a glTF model in the pose its nodes give it without
+    /// animation).
     pub fn mesh(&self) -> &Mesh {
         &self.mesh
+    }
+
+    /// The mesh as drawn at `time`: a glTF model posed by its clip (skinned, its frames
+    /// rebuilt on the posed surface), any other mesh as it is.
+    pub fn mesh_at(&self, time: f32) -> std::borrow::Cow<'_, Mesh> {
+        match &self.character {
+            Some(posing) if posing.clip.is_some() => std::borrow::Cow::Owned(posing.mesh_at(time)),
+            _ => std::borrow::Cow::Borrowed(&self.mesh),
+        }
+    }
+
+    /// The joint palette at `time` as column-major 4×4 matrices (`mesh.scale` included), and
+    /// each rest vertex's four palette indices and weights: what a GPU's vertex stage skins
+    /// with. `None` for meshes that are not glTF models.
+    pub fn skinning_at(&self, time: f32) -> Option<Skinning> {
+        let posing = self.character.as_ref()?;
+        Some(Skinning {
+            palette: posing
+                .palette_at(time)
+                .iter()
+                .map(|m| m.to_cols_4x4())
+                .collect(),
+            influences: posing.rig.influences.clone(),
+            bind: posing.bind.clone(),
+        })
     }
 
     /// Draws one frame at the scene's own time with the given tile size.
@@ -626,7 +772,10 @@ impl PreparedScene {
         let maps = &self.maps;
         let n = s.fur.number_of_shells;
         let max_shell = n - 1;
-        let lod = self.level_of_detail(s, moved.unwrap_or(Vec3::ZERO));
+        // A glTF model posed at this instant: every pass below grows from the posed body.
+        let posed = self.mesh_at(time);
+        let body: &Mesh = &posed;
+        let lod = self.level_of_detail(s, body, moved.unwrap_or(Vec3::ZERO));
         let mut frame = Frame::new(&mut fb);
         frame.set_simd_level(level);
 
@@ -641,8 +790,8 @@ impl PreparedScene {
             lod_span: 1.0,
         };
         frame.draw(
-            &self.mesh.vertices,
-            &self.mesh.indices,
+            &body.vertices,
+            &body.indices,
             DrawState {
                 cull: CullMode::Back,
                 ..DrawState::default()
@@ -684,7 +833,7 @@ impl PreparedScene {
             && fin_fade != Some(0.0)
         {
             let (vertices, triangles) =
-                self.fin_geometry(camera.eye, light, bending, shade, moved, fin_fade);
+                self.fin_geometry(body, camera.eye, light, bending, shade, moved, fin_fade);
             let fin_sampler = Sampler {
                 address_u: AddressMode::Wrap,
                 address_v: AddressMode::Clamp,
@@ -729,10 +878,10 @@ impl PreparedScene {
             };
             // Triangles whose fur is surely burnt away on this layer are not drawn at all: the
             // image is the same, and burnt fur costs nothing (thesis table 4.6).
-            let kept = self.unburnt_triangles(shade, layer.index, max_shell);
+            let kept = self.unburnt_triangles(body, shade, layer.index, max_shell);
             frame.draw_quads(
-                &self.mesh.vertices,
-                kept.as_deref().unwrap_or(&self.mesh.indices),
+                &body.vertices,
+                kept.as_deref().unwrap_or(&body.indices),
                 blended,
                 move |v: &mesh::Vertex| {
                     // A length map scales the layer's height above the skin (1 without one).
@@ -813,9 +962,14 @@ impl PreparedScene {
 
     /// Level of detail for a frame of `s` with the object moved by `moved`: `None` without
     /// `[lod]`.
-    fn level_of_detail(&self, s: &Scene, moved: Vec3) -> Option<LevelOfDetail> {
+    fn level_of_detail(&self, s: &Scene, body: &Mesh, moved: Vec3) -> Option<LevelOfDetail> {
         let lod = s.lod.as_ref()?;
-        let (centre, radius) = self.bounds;
+        // A posed model's bounds move with it; a still mesh's were measured once.
+        let (centre, radius) = if std::ptr::eq(body, &self.mesh) {
+            self.bounds
+        } else {
+            bounding_sphere(body)
+        };
         // The distance to the nearest point of the bounding sphere: the fur there is the
         // largest on screen, and it must keep its look.
         let distance = (s.camera.eye - (centre + moved)).length() - radius;
@@ -847,22 +1001,22 @@ impl PreparedScene {
             .motion
             .as_ref()
             .map_or(Vec3::ZERO, |m| crate::shading::path_position(&m.path, time));
-        self.level_of_detail(&self.scene, moved)
+        self.level_of_detail(&self.scene, &self.mesh_at(time), moved)
     }
 
     /// The mesh's triangles minus those whose fur is surely burnt away on `layer`; `None` when
     /// nothing burns (draw them all).
     fn unburnt_triangles(
         &self,
+        body: &Mesh,
         shade: &ShadeParams,
         layer: u32,
         max_shell: u32,
     ) -> Option<Vec<[u32; 3]>> {
         let burn = shade.burn.as_ref()?;
-        let normal = |i: u32| self.mesh.vertices.get(i as usize).map(|v| v.normal);
+        let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.normal);
         Some(
-            self.mesh
-                .indices
+            body.indices
                 .iter()
                 .filter(|t| match (normal(t[0]), normal(t[1]), normal(t[2])) {
                     (Some(a), Some(b), Some(c)) => !burn.surely_burnt([a, b, c], layer, max_shell),
@@ -878,8 +1032,10 @@ impl PreparedScene {
     /// wind and lean like the top shell, everything moved by the object's path offset. Their
     /// frame: x along the edge (texture u), z up the averaged normal (texture v), y = z × x.
     /// `lod_fade` multiplies every corner's fade.
+    #[allow(clippy::too_many_arguments)]
     fn fin_geometry(
         &self,
+        body: &Mesh,
         eye: Vec3,
         light: Vec3,
         bending: Bending,
@@ -909,14 +1065,14 @@ impl PreparedScene {
         };
         let selected = match self.scene.fur.fin_selection {
             FinSelectionSetting::Outline => {
-                mesh::fins::outline_edges(&self.mesh, &self.edges, object_eye)
+                mesh::fins::outline_edges(body, &self.edges, object_eye)
             }
             FinSelectionSetting::AngleWindows => {
-                mesh::fins::silhouette_edges(&self.mesh, &self.edges, object_eye, &windows)
+                mesh::fins::silhouette_edges(body, &self.edges, object_eye, &windows)
             }
         };
         let chains = mesh::fins::fin_chains(&self.edges, &selected);
-        let vertex = |i: u32| self.mesh.vertices.get(i as usize);
+        let vertex = |i: u32| body.vertices.get(i as usize);
         let tile = self.tile_world_size.x;
         let mut vertices = Vec::with_capacity(selected.len() * 4);
         let mut triangles = Vec::with_capacity(selected.len() * 2);
@@ -1129,8 +1285,10 @@ impl PreparedScene {
             .motion
             .as_ref()
             .map(|m| crate::shading::path_position(&m.path, time));
-        let lod = self.level_of_detail(s, moved.unwrap_or(Vec3::ZERO));
+        let body = self.mesh_at(time);
+        let lod = self.level_of_detail(s, &body, moved.unwrap_or(Vec3::ZERO));
         self.fin_geometry(
+            &body,
             s.camera.eye,
             s.light.direction.normalize_or_zero(),
             Bending::at(s, time),

@@ -72,6 +72,8 @@ pub struct Scene {
     pub gravity: Option<GravitySettings>,
     /// The object moving along a path, its fur lagging on damped springs; absent: at rest.
     pub motion: Option<MotionSettings>,
+    /// A glTF model's animation clip played at the scene time; absent: the rest pose.
+    pub animation: Option<AnimationSettings>,
     /// Directory relative paths are resolved against (the scene file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -96,6 +98,7 @@ impl Default for Scene {
             lod: None,
             gravity: None,
             motion: None,
+            animation: None,
             base_dir: PathBuf::from("."),
         }
     }
@@ -187,6 +190,9 @@ pub enum MeshKind {
     Leg,
     /// A Wavefront OBJ file (`path`, relative to the scene file).
     Obj,
+    /// A glTF 2.0 model, `.glb` or `.gltf` (`path`, relative to the scene file; `node` picks
+    /// one node's subtree), skinned and posed at the scene time by `[animation]`.
+    Gltf,
 }
 
 /// `[mesh]`
@@ -205,9 +211,12 @@ pub struct MeshSettings {
     pub height: f32,
     /// Triangle count of procedural meshes (thesis `modelResolution`, base 500).
     pub model_resolution: u32,
-    /// OBJ file, relative to the scene file.
+    /// OBJ or glTF file, relative to the scene file.
     pub path: Option<PathBuf>,
-    /// Uniform scale applied to OBJ and leg positions (the leg is about 2 units tall at 1).
+    /// glTF: the node whose subtree's meshes carry the fur (default: every mesh of the default
+    /// scene).
+    pub node: Option<String>,
+    /// Uniform scale applied to OBJ, glTF and leg positions (the leg is about 2 units tall at 1).
     pub scale: f32,
 }
 
@@ -221,6 +230,7 @@ impl Default for MeshSettings {
             height: 4.0,
             model_resolution: 500,
             path: None,
+            node: None,
             scale: 1.0,
         }
     }
@@ -302,6 +312,9 @@ pub struct FurSettings {
     pub fin_windows: Vec<[f32; 2]>,
     /// Fin strands are this much taller than shell strands.
     pub fin_height_scale: f32,
+    /// glTF models: the material's base-colour texture × factor at the root multiplies the
+    /// strand colour (as a `maps.colour` map would).
+    pub colour_from_mesh: bool,
 }
 
 impl FurSettings {
@@ -342,6 +355,7 @@ impl Default for FurSettings {
             fin_selection: FinSelectionSetting::Outline,
             fin_windows: vec![[70.0, 110.0], [160.0, 200.0]],
             fin_height_scale: 1.2,
+            colour_from_mesh: false,
         }
     }
 }
@@ -839,6 +853,50 @@ impl Default for MotionSettings {
     }
 }
 
+/// Which clip `[animation]` plays: its name in the file, or its index from 0.
+#[derive(Clone, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum ClipSetting {
+    /// The clip's index, counting from 0.
+    Index(u32),
+    /// The clip's name.
+    Name(String),
+}
+
+/// `[animation]`: a clip of the glTF model, sampled at the scene time (`--time`, frame
+/// `k/fps`, `sweep --param time=…`).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AnimationSettings {
+    /// The clip: a name, or an index from 0.
+    pub clip: ClipSetting,
+    /// Clip seconds per scene second.
+    pub speed: f32,
+    /// Whether the clip repeats (otherwise it holds its last pose).
+    #[serde(rename = "loop")]
+    pub looping: bool,
+}
+
+impl Default for AnimationSettings {
+    fn default() -> Self {
+        AnimationSettings {
+            clip: ClipSetting::Index(0),
+            speed: 1.0,
+            looping: true,
+        }
+    }
+}
+
+impl AnimationSettings {
+    /// The clip as the glTF loader takes it.
+    pub fn choice(&self) -> crate::mesh::gltf::ClipChoice {
+        match &self.clip {
+            ClipSetting::Index(i) => crate::mesh::gltf::ClipChoice::Index(*i as usize),
+            ClipSetting::Name(n) => crate::mesh::gltf::ClipChoice::Name(n.clone()),
+        }
+    }
+}
+
 /// The keys of `[mesh]` that shape a mesh of `kind` (besides `kind` itself).
 fn mesh_keys(kind: MeshKind) -> &'static [&'static str] {
     match kind {
@@ -847,6 +905,7 @@ fn mesh_keys(kind: MeshKind) -> &'static [&'static str] {
         MeshKind::Cylinder => &["radius", "height", "model_resolution"],
         MeshKind::Leg => &["model_resolution", "scale"],
         MeshKind::Obj => &["path", "scale"],
+        MeshKind::Gltf => &["path", "node", "scale"],
     }
 }
 
@@ -857,6 +916,7 @@ fn debug_kind(kind: MeshKind) -> &'static str {
         MeshKind::Cylinder => "cylinder",
         MeshKind::Leg => "leg",
         MeshKind::Obj => "obj",
+        MeshKind::Gltf => "gltf",
     }
 }
 

@@ -183,6 +183,43 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
             "mesh.kind = \"obj\" needs mesh.path".into(),
         ));
     }
+    if m.kind == super::MeshKind::Gltf && m.path.is_none() {
+        return Err((
+            "mesh.kind".into(),
+            "mesh.kind = \"gltf\" needs mesh.path".into(),
+        ));
+    }
+    if let Some(a) = &scene.animation {
+        if m.kind != super::MeshKind::Gltf {
+            return Err((
+                "animation".into(),
+                "[animation] plays a clip of a glTF model; it needs mesh.kind = \"gltf\"".into(),
+            ));
+        }
+        range_f32("animation.speed", a.speed, -1000.0, 1000.0)?;
+        if let super::ClipSetting::Name(name) = &a.clip
+            && name.is_empty()
+        {
+            return Err((
+                "animation.clip".into(),
+                "animation.clip must name a clip or give its index".into(),
+            ));
+        }
+    }
+    if scene.fur.colour_from_mesh {
+        if m.kind != super::MeshKind::Gltf {
+            return Err((
+                "fur.colour_from_mesh".into(),
+                "fur.colour_from_mesh takes the colour of a glTF model's material; it needs mesh.kind = \"gltf\"".into(),
+            ));
+        }
+        if scene.maps.colour.is_some() {
+            return Err((
+                "fur.colour_from_mesh".into(),
+                "fur.colour_from_mesh and maps.colour both tint the fur; keep one".into(),
+            ));
+        }
+    }
 
     let f = &scene.fur;
     range_u32(
