@@ -2,6 +2,9 @@
 //! - `bake`: the fur textures of thesis chapter 4.2 (3000 strands × 30 shells × 128², circle
 //!   and strand resolution 20) and of its heavy start-up case (10,000 strands, circle 50);
 //! - `frame`: one frame of `scenes/thesis-4-2.toml` at 1366×768, baked once outside the loop;
+//! - `character`: the walking fox of `scenes/fox.toml` at 1366×768 with 30 shells: posing alone
+//!   (skinning and frames on the posed surface, `PreparedScene::mesh_at`) and the whole frame,
+//!   so the share posing takes can be read off (the bound: at most 10 %);
 //! - `shading`: the fragment stage's terms on their own (strand lighting with its batched
 //!   powers, the shell shadow's lookups, a light spot, the burn rule), per fragment.
 //!
@@ -46,6 +49,24 @@ fn frame(c: &mut Criterion) {
     let fragments = prepared.render(64).expect("frame").stats.fragments_shaded;
     group.throughput(Throughput::Elements(fragments));
     group.bench_function("thesis-4-2", |b| {
+        b.iter(|| black_box(prepared.render(64).expect("frame")))
+    });
+    group.finish();
+}
+
+fn character(c: &mut Criterion) {
+    let mut scene = Scene::load(Path::new("scenes/fox.toml")).expect("fox scene");
+    scene.image.width = 1366;
+    scene.image.height = 768;
+    scene.fur.number_of_shells = 30;
+    scene.time = 0.4;
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    let mut group = c.benchmark_group("character");
+    group.sample_size(10);
+    group.bench_function("fox-posing", |b| {
+        b.iter(|| black_box(prepared.mesh_at(black_box(0.4))))
+    });
+    group.bench_function("fox-frame", |b| {
         b.iter(|| black_box(prepared.render(64).expect("frame")))
     });
     group.finish();
@@ -157,5 +178,5 @@ fn shading_terms(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bake, frame, shading_terms);
+criterion_group!(benches, bake, frame, character, shading_terms);
 criterion_main!(benches);

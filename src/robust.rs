@@ -83,6 +83,51 @@ pub fn obj_bytes(bytes: &[u8]) {
     shells_and_fins(&loaded.mesh);
 }
 
+/// Loads `bytes` as a glTF or GLB file (no external files: only the GLB chunk and data URIs);
+/// when it is accepted, poses it at rest and at a few instants of every clip, checking each
+/// posed mesh ([`check_mesh`]) and its shells and fins.
+pub fn gltf_bytes(bytes: &[u8]) {
+    let Ok(character) = mesh::gltf::load_bytes(bytes, Path::new("fuzz.glb"), None, None, 1.0)
+    else {
+        return;
+    };
+    let rig = &character.rig;
+    let rest = mesh::skin::pose(&character.bind, &rig.influences, &rig.rest_palette());
+    check_posed(&rest);
+    for (index, clip) in character.clips.iter().enumerate() {
+        if character.morph_clips[index] {
+            continue;
+        }
+        for time in [0.0, 0.37, 1.0e3] {
+            let t = clip.clip_time(time, 1.0, true);
+            let palette = rig.palette(&clip.sample(&rig.skeleton.rest, t));
+            check_posed(&mesh::skin::pose(
+                &character.bind,
+                &rig.influences,
+                &palette,
+            ));
+        }
+    }
+}
+
+/// A posed mesh: finite positions give finite frames, shells and fins. (A pose may place
+/// vertices anywhere a file's transforms send them, overflow included: those are skipped.)
+fn check_posed(mesh: &Mesh) {
+    if mesh
+        .vertices
+        .iter()
+        .all(|v| v.position.is_finite() && v.position.abs().max_element() < 1e18)
+    {
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            let f = v.frame;
+            assert!(
+                f.tangent.is_finite() && f.binormal.is_finite() && f.normal.is_finite(),
+                "posed vertex {i}: frame not finite: {v:?}"
+            );
+        }
+    }
+}
+
 /// Shell extrusion at a few offsets and fin selection from a few eyes: all finite.
 pub fn shells_and_fins(mesh: &Mesh) {
     for offset in [0.0, 0.37, 10.0] {

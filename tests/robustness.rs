@@ -335,13 +335,43 @@ proptest! {
     }
 }
 
+/// The generated tail (a glTF with a data URI) and the fox (a GLB), with bytes changed or cut.
+fn mutated_model() -> impl Strategy<Value = Vec<u8>> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tail = std::fs::read(root.join("scenes/meshes/tail/tail.gltf")).expect("tail.gltf");
+    let fox = std::fs::read(root.join("scenes/meshes/fox/Fox.glb")).expect("Fox.glb");
+    (
+        prop_oneof![Just(tail), Just(fox)],
+        proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+        prop_oneof![Just(None), any::<prop::sample::Index>().prop_map(Some)],
+    )
+        .prop_map(|(mut bytes, edits, cut)| {
+            for (at, value) in edits {
+                let i = at.index(bytes.len());
+                bytes[i] = value;
+            }
+            if let Some(cut) = cut {
+                bytes.truncate(cut.index(bytes.len()));
+            }
+            bytes
+        })
+}
+
+proptest! {
+    #![proptest_config(config(300, 0x91f))]
+    #[test]
+    fn mutated_models_never_panic(bytes in mutated_model()) {
+        pelage::robust::gltf_bytes(&bytes);
+    }
+}
+
 /// Every input a fuzz target or property test once failed on (`fuzz/regressions/TARGET/`),
 /// replayed through the same entry point.
 #[test]
 fn fuzz_regressions_stay_fixed() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions");
     let mut replayed = 0;
-    for target in ["scene", "obj", "triangle"] {
+    for target in ["scene", "obj", "triangle", "gltf"] {
         let Ok(entries) = std::fs::read_dir(root.join(target)) else {
             continue;
         };
@@ -350,6 +380,7 @@ fn fuzz_regressions_stay_fixed() {
             match target {
                 "scene" => pelage::robust::scene_text(&String::from_utf8_lossy(&data)),
                 "obj" => pelage::robust::obj_bytes(&data),
+                "gltf" => pelage::robust::gltf_bytes(&data),
                 _ => pelage::robust::triangle_bytes(&data),
             }
             replayed += 1;

@@ -106,12 +106,27 @@ impl Bench<'_> {
         let bar = progress(u64::from(self.args.frames));
         let mut samples = Samples::default();
         let mut fragments = 0;
+        let mut posing = Vec::new();
         for _ in 0..self.args.frames {
             fragments = samples.time(|| self.oracle_frame())?;
+            // A posed character: its posing (skinning, frames on the posed surface) timed
+            // again alone, on the same pool, for the share of the frame it takes.
+            if self.prepared.poses() {
+                let start = Instant::now();
+                let posed = self
+                    .pool
+                    .install(|| self.prepared.mesh_at(self.scene.time));
+                std::hint::black_box(&posed);
+                posing.push(start.elapsed().as_secs_f64() * 1e3);
+            }
             bar.inc(1);
         }
         bar.finish_and_clear();
-        Ok(self.report(&samples, Some(fragments)))
+        let mut report = self.report(&samples, Some(fragments));
+        if !posing.is_empty() {
+            report.posing_ms = Some(round(Spread::of(&posing).median, 3));
+        }
+        Ok(report)
     }
 
     /// The oracle's report of `samples` (the GPU's fields are filled in by the caller).
@@ -135,6 +150,7 @@ impl Bench<'_> {
             min_cpu_ms: cpu.as_ref().map(|c| round(c.min, 3)),
             max_cpu_ms: cpu.as_ref().map(|c| round(c.max, 3)),
             readback_ms: None,
+            posing_ms: None,
             peak_memory_mib: peak_memory_bytes().map(|b| round(b as f64 / (1024.0 * 1024.0), 1)),
             fragments_per_frame: fragments,
             fragments_per_s: fragments.map(|f| (f as f64 / (wall.median / 1e3)).round() as u64),
@@ -350,6 +366,9 @@ struct Report {
     max_cpu_ms: Option<f64>,
     /// The GPU's readback of one frame, not in its frame times.
     readback_ms: Option<f64>,
+    /// A glTF character's posing (skinning and frames on the posed surface), median of each
+    /// frame's posing timed again alone; part of the frame times.
+    posing_ms: Option<f64>,
     peak_memory_mib: Option<f64>,
     fragments_per_frame: Option<u64>,
     fragments_per_s: Option<u64>,
@@ -399,6 +418,12 @@ impl Report {
                 per_s as f64 / 1e6
             )),
             _ => lines.push("fragments shaded per frame: not counted on the GPU".to_string()),
+        }
+        if let Some(posing) = self.posing_ms {
+            lines.push(format!(
+                "posing (skinning, frames on the posed surface) {posing:.2} ms a frame, {:.1} % of the median frame (timed again alone)",
+                100.0 * posing / self.median_frame_ms
+            ));
         }
         if let Some(readback) = self.readback_ms {
             lines.push(format!(

@@ -331,10 +331,14 @@ impl Rig {
 
 /// `rest` posed by `palette`: each vertex through its blended matrix (module docs). The
 /// vertices keep their uvs; the triangles are shared.
+///
+/// Vertices are posed in parallel: each is its own computation, so the result does not depend
+/// on the thread count.
 pub fn pose(rest: &Mesh, influences: &[Influences], palette: &[Affine]) -> Mesh {
+    use rayon::prelude::*;
     let vertices = rest
         .vertices
-        .iter()
+        .par_iter()
         .zip(influences)
         .map(|(v, influence)| pose_vertex(v, &influence.blend(palette)))
         .collect();

@@ -630,6 +630,11 @@ impl PreparedScene {
         &self.mesh
     }
 
+    /// Whether the mesh is posed again for every frame (a glTF model with `[animation]`).
+    pub fn poses(&self) -> bool {
+        self.character.as_ref().is_some_and(|c| c.clip.is_some())
+    }
+
     /// The mesh as drawn at `time`: a glTF model posed by its clip (skinned, its frames
     /// rebuilt on the posed surface), any other mesh as it is.
     pub fn mesh_at(&self, time: f32) -> std::borrow::Cow<'_, Mesh> {
