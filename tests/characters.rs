@@ -529,3 +529,54 @@ fn scenes_refuse_unknown_clips_and_keys_out_of_place_with_exit_2() {
         assert!(stderr.contains(words), "{name}: {stderr}");
     }
 }
+
+#[test]
+fn fur_lags_behind_each_posed_vertex_and_not_behind_a_still_pose() {
+    let scene = common::scene("tail", 96, 72);
+    assert!(scene.motion.is_some(), "scenes/tail.toml has [motion]");
+    let prepared = PreparedScene::new(&scene).expect("prepares");
+    let posed = prepared.mesh_at(0.6);
+    let tip = posed
+        .vertices
+        .iter()
+        .max_by(|a, b| a.rest_position.y.total_cmp(&b.rest_position.y))
+        .expect("vertices");
+    assert!(
+        tip.lag.length() > 1e-3,
+        "the wagging tip lags: {:?}",
+        tip.lag
+    );
+    assert!(posed.vertices.iter().all(|v| v.lag.is_finite()));
+    // The rest fields stay the rest pose's.
+    for (a, b) in posed.vertices.iter().zip(&prepared.mesh().vertices) {
+        assert_eq!(a.rest_position, b.rest_position);
+        assert_eq!(a.rest_normal, b.rest_normal);
+    }
+    // A clip that does not move (speed 0) leaves nothing to lag behind.
+    let mut still = scene.clone();
+    if let Some(a) = still.animation.as_mut() {
+        a.speed = 0.0;
+    }
+    let prepared = PreparedScene::new(&still).expect("prepares");
+    assert!(
+        prepared
+            .mesh_at(0.6)
+            .vertices
+            .iter()
+            .all(|v| v.lag == glam::Vec3::ZERO)
+    );
+    // The lag moves the fur: the same instant without [motion] differs.
+    let mut calm = scene.clone();
+    calm.motion = None;
+    let with = PreparedScene::new(&scene)
+        .unwrap()
+        .render_at(0.6, 32)
+        .unwrap()
+        .rgba8;
+    let without = PreparedScene::new(&calm)
+        .unwrap()
+        .render_at(0.6, 32)
+        .unwrap()
+        .rgba8;
+    assert!(common::differing_pixels(&with, &without) > 20);
+}

@@ -265,6 +265,9 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
                 frame: TangentFrame::from_derivatives(normal, dpdu, dpdv),
                 dpdu,
                 dpdv,
+                rest_position: positions[i],
+                rest_normal: normal,
+                lag: Vec3::ZERO,
             }
         })
         .collect();

@@ -54,6 +54,27 @@ pub struct Vertex {
     /// ∂p/∂v: the *unnormalised* binormal B of eq. 3.2, world length per unit of v, averaged
     /// like [`Vertex::dpdu`].
     pub dpdv: Vec3,
+    /// The vertex in the object's own frame: equal to `position` for a mesh that is not posed;
+    /// for a posed glTF character, its position in the rest pose. What is fixed to the object
+    /// (spots, stripes, the matches of thesis 3.4) is evaluated here, so it stays on the body
+    /// as the body moves.
+    pub rest_position: Vec3,
+    /// The normal in the object's own frame, as [`Vertex::rest_position`].
+    pub rest_normal: Vec3,
+    /// How far the fur tips lag behind this vertex's own motion, world units, before the
+    /// scene's `motion.response` scales it: zero but for a posed character with `[motion]`
+    /// ([`crate::shading::spring_lag`] over the vertex's posed trajectory).
+    pub lag: Vec3,
+}
+
+impl Vertex {
+    /// Makes the rest fields the current position and normal (a mesh that is not posed).
+    pub fn at_rest(mut self) -> Vertex {
+        self.rest_position = self.position;
+        self.rest_normal = self.normal;
+        self.lag = Vec3::ZERO;
+        self
+    }
 }
 
 /// An indexed triangle mesh with per-vertex frames.

@@ -363,6 +363,9 @@ pub fn pose_vertex(v: &Vertex, m: &Affine) -> Vertex {
         frame: TangentFrame::from_derivatives(normal, dpdu, dpdv),
         dpdu,
         dpdv,
+        rest_position: v.rest_position,
+        rest_normal: v.rest_normal,
+        lag: v.lag,
     }
 }
 

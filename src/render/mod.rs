@@ -183,7 +183,15 @@ struct Posing {
     clip: Option<(mesh::animation::Clip, f32, bool)>,
     /// How far the skin is moved along its normals (`fur.skin_inset`).
     inset: f32,
+    /// The spring of `[motion]` (frequency, damping), when the scene has one: the fur then lags
+    /// behind each vertex's own posed motion too.
+    spring: Option<(f32, f32)>,
 }
+
+/// The step at which a posed vertex's trajectory is sampled for its lag, seconds.
+pub const LAG_SAMPLE_STEP: f32 = 1.0 / 30.0;
+/// The longest window of a posed vertex's past that its lag reads, seconds.
+pub const LAG_MAX_WINDOW: f32 = 4.0;
 
 impl Posing {
     /// The palette at scene time `time`.
@@ -197,13 +205,61 @@ impl Posing {
         }
     }
 
-    /// The posed mesh at scene time `time`.
-    fn mesh_at(&self, time: f32) -> Mesh {
+    /// The posed mesh at scene time `time`; `rest` (the rest pose, same vertices) gives each
+    /// vertex its rest position and normal.
+    fn mesh_at(&self, rest: &Mesh, time: f32) -> Mesh {
         let palette = self.palette_at(time);
-        inset(
+        let mut posed = inset(
             mesh::skin::pose(&self.bind, &self.rig.influences, &palette),
             self.inset,
-        )
+        );
+        let lags = self.spring.map(|(f, d)| self.lags(time, f, d));
+        for (k, (v, r)) in posed.vertices.iter_mut().zip(&rest.vertices).enumerate() {
+            v.rest_position = r.rest_position;
+            v.rest_normal = r.rest_normal;
+            v.lag = lags.as_ref().map_or(Vec3::ZERO, |l| l[k]);
+        }
+        posed
+    }
+
+    /// The skinned positions at `time` (no frames: what the lag reads).
+    fn positions_at(&self, time: f32) -> Vec<Vec3> {
+        use rayon::prelude::*;
+        let palette = self.palette_at(time);
+        self.bind
+            .vertices
+            .par_iter()
+            .zip(&self.rig.influences)
+            .map(|(v, i)| i.blend(&palette).transform_point(v.position))
+            .collect()
+    }
+
+    /// Each vertex's lag at `time` ([`crate::shading::spring_lag`] of its own trajectory): the
+    /// skinned positions sampled every [`LAG_SAMPLE_STEP`] over the last
+    /// `W = min(ln 100 / (ζω), LAG_MAX_WINDOW)` seconds (the spring's envelope falls to 1 % in
+    /// `ln 100 / (ζω)`), joined linearly and starting from rest at the window's start; each
+    /// velocity change `Δv_j` at sample time `s_j` adds `Δv_j·g(time − s_j)`, in sample order.
+    fn lags(&self, time: f32, frequency: f32, damping: f32) -> Vec<Vec3> {
+        let zeta = damping.clamp(0.01, 0.99);
+        let omega = std::f32::consts::TAU * frequency.max(0.01);
+        let window = (libm::logf(100.0) / (zeta * omega)).min(LAG_MAX_WINDOW);
+        let steps = (window / LAG_SAMPLE_STEP).ceil().max(1.0) as usize;
+        let sample = |j: usize| time - (steps - j) as f32 * LAG_SAMPLE_STEP;
+        let n = self.bind.vertices.len();
+        let mut lag = vec![Vec3::ZERO; n];
+        let mut velocity = vec![Vec3::ZERO; n];
+        let mut previous = self.positions_at(sample(0));
+        for j in 0..steps {
+            let next = self.positions_at(sample(j + 1));
+            let g = crate::shading::spring_impulse_response(time - sample(j), frequency, damping);
+            for k in 0..n {
+                let v = (next[k] - previous[k]) / LAG_SAMPLE_STEP;
+                lag[k] += (v - velocity[k]) * g;
+                velocity[k] = v;
+            }
+            previous = next;
+        }
+        lag
     }
 }
 
@@ -219,6 +275,8 @@ struct Bending {
     /// Whether a bent layer is pulled back along −normal to keep the strands' length (thesis
     /// 3.3); `false` only with `wind.keep_length = false` (figure 3.16).
     keep_length: bool,
+    /// `motion.response`: the bend per world unit of lag (1 without `[motion]`).
+    response: f32,
 }
 
 impl Bending {
@@ -237,6 +295,7 @@ impl Bending {
             wind,
             lean,
             keep_length: s.wind.as_ref().is_none_or(|w| w.keep_length),
+            response: s.motion.as_ref().map_or(1.0, |m| m.response),
         }
     }
 
@@ -264,7 +323,12 @@ impl Bending {
             let c = crate::shading::comb_lean(maps.sample(m, v.uv));
             v.frame.tangent * c.x + v.frame.binormal * c.y
         });
-        shared + comb
+        // A posed character's own motion: zero for every other mesh, which adds nothing.
+        if v.lag == Vec3::ZERO {
+            shared + comb
+        } else {
+            shared + comb + v.lag * self.response
+        }
     }
 
     /// Displacement of a layer at `fraction` of a strand `height` long over a vertex with this
@@ -455,7 +519,7 @@ fn build_mesh(scene: &Scene) -> Result<BuiltMesh, RenderError> {
             let path = m.path.clone().unwrap_or_default();
             let loaded = mesh::obj::load_obj(&scene.base_dir.join(path))?;
             let mesh = inset(scaled(loaded.mesh, m.scale), scene.fur.skin_inset());
-            return Ok((mesh, loaded.warnings, None, None));
+            return Ok((at_rest(mesh), loaded.warnings, None, None));
         }
         MeshKind::Gltf => {
             let path = scene.base_dir.join(m.path.clone().unwrap_or_default());
@@ -475,21 +539,35 @@ fn build_mesh(scene: &Scene) -> Result<BuiltMesh, RenderError> {
                 rig: loaded.rig,
                 clip,
                 inset: scene.fur.skin_inset(),
+                spring: scene.motion.as_ref().map(|m| (m.frequency, m.damping)),
             };
             // The rest pose: what every time-independent quantity (the fur tile's size, the
             // bake) is measured on, so that a frame is the same whatever time was prepared.
-            let rest = inset(
+            let rest = at_rest(inset(
                 mesh::skin::pose(
                     &posing.bind,
                     &posing.rig.influences,
                     &posing.rig.rest_palette(),
                 ),
                 posing.inset,
-            );
+            ));
             return Ok((rest, loaded.warnings, Some(posing), loaded.base_colour));
         }
     };
-    Ok((inset(mesh, scene.fur.skin_inset()), Vec::new(), None, None))
+    Ok((
+        at_rest(inset(mesh, scene.fur.skin_inset())),
+        Vec::new(),
+        None,
+        None,
+    ))
+}
+
+/// Every vertex's rest fields set to its position and normal as built.
+fn at_rest(mut mesh: Mesh) -> Mesh {
+    for v in &mut mesh.vertices {
+        *v = v.at_rest();
+    }
+    mesh
 }
 
 /// The base colour as a colour map: each texel times the factor, rounded to the nearest byte
@@ -639,7 +717,9 @@ impl PreparedScene {
     /// rebuilt on the posed surface), any other mesh as it is.
     pub fn mesh_at(&self, time: f32) -> std::borrow::Cow<'_, Mesh> {
         match &self.character {
-            Some(posing) if posing.clip.is_some() => std::borrow::Cow::Owned(posing.mesh_at(time)),
+            Some(posing) if posing.clip.is_some() => {
+                std::borrow::Cow::Owned(posing.mesh_at(&self.mesh, time))
+            }
             _ => std::borrow::Cow::Borrowed(&self.mesh),
         }
     }
@@ -803,15 +883,18 @@ impl PreparedScene {
             },
             |v: &mesh::Vertex| ClipVertex {
                 position: view_proj * place(v.position).extend(1.0),
-                varyings: v.normal,
+                // The normal as posed lights the skin; the rest normal meets the matches, which
+                // are fixed to the object (the same vector for a mesh that is not posed).
+                varyings: (v.normal, v.rest_normal),
             },
             move |f| {
                 if debug {
                     return Some(Vec4::new(0.0, 0.0, 0.0, 1.0));
                 }
-                let n = f.varyings().normalize_or_zero();
+                let (posed, rest) = *f.varyings();
+                let n = posed.normalize_or_zero();
                 let colour = shade
-                    .burn_outcome(n, &skin_layer)
+                    .burn_outcome(rest.normalize_or_zero(), &skin_layer)
                     .strand_colour(skin_colour);
                 Some((colour * (0.5 + 0.5 * n.dot(light).max(0.0))).extend(1.0))
             },
@@ -939,8 +1022,8 @@ impl PreparedScene {
                                 mesh_uv: v.uv,
                                 length,
                                 fade: 1.0,
-                                normal: v.normal,
-                                object: v.position,
+                                normal: v.rest_normal,
+                                object: v.rest_position,
                             },
                             lit: LitVaryings {
                                 light: crate::shading::to_tangent_space(light, &v.frame),
@@ -1019,7 +1102,7 @@ impl PreparedScene {
         max_shell: u32,
     ) -> Option<Vec<[u32; 3]>> {
         let burn = shade.burn.as_ref()?;
-        let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.normal);
+        let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.rest_normal);
         Some(
             body.indices
                 .iter()
@@ -1136,11 +1219,9 @@ impl PreparedScene {
                     continue;
                 }
                 // A fin burns like the top shell; one surely burnt away is left out.
-                if shade
-                    .burn
-                    .as_ref()
-                    .is_some_and(|burn| burn.surely_burnt([a.normal, b.normal, a.normal], top, top))
-                {
+                if shade.burn.as_ref().is_some_and(|burn| {
+                    burn.surely_burnt([a.rest_normal, b.rest_normal, a.rest_normal], top, top)
+                }) {
                     continue;
                 }
                 let frame = mesh::frame::TangentFrame {
@@ -1203,8 +1284,8 @@ impl PreparedScene {
                                     Some(l) => fade * l,
                                     None => fade,
                                 },
-                                normal: root.normal,
-                                object: root.position,
+                                normal: root.rest_normal,
+                                object: root.rest_position,
                             },
                             lit: LitVaryings {
                                 light: crate::shading::to_tangent_space(light, &frame),
