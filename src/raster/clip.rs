@@ -22,6 +22,15 @@ pub const W_MIN: f32 = 1.0e-5;
 /// `|x/w| ≤ GUARD_BAND` and `|y/w| ≤ GUARD_BAND`.
 pub const GUARD_BAND: f32 = 64.0;
 
+/// Whether a clip-space position is one [`clip_triangle`] can emit: finite, in front of the eye
+/// with a finite `1/w` (not a subnormal `w`), and inside the guard band (with a margin of one
+/// for rounding). Setup refuses positions outside it, which keeps its fixed-point bound.
+#[inline]
+pub fn within_guard_band(p: Vec4) -> bool {
+    let band = (GUARD_BAND + 1.0) * p.w;
+    p.is_finite() && p.w > 0.0 && (1.0 / p.w).is_finite() && p.x.abs() <= band && p.y.abs() <= band
+}
+
 /// A vertex after the vertex stage: clip-space position and its varyings.
 #[derive(Clone, Copy, Debug)]
 pub struct ClipVertex<V> {
@@ -140,7 +149,7 @@ pub fn clip_triangle<V: Varyings>(
     // changes an image.
     if !polygon[..count]
         .iter()
-        .all(|v| super::setup::within_guard_band(v.position))
+        .all(|v| within_guard_band(v.position))
     {
         return;
     }

@@ -10,9 +10,8 @@ use super::RasterError;
 use super::bin::TileGrid;
 use super::clip::{ClipVertex, clip_triangle, inside_clip_volume};
 use super::framebuffer::{Framebuffer, TileTarget};
-use super::setup::{
-    CullMode, ScreenVertex, SetupTriangle, setup_screen_triangle, setup_triangle_order,
-};
+use super::setup::{ScreenVertex, SetupTriangle, setup_screen_triangle, setup_triangle_order};
+pub use super::state::{BlendMode, DepthCompare, DrawState};
 use super::tile::{
     Fragment, HeldPixels, PerFragment, QuadShader, RasterStats, finish_tile,
     holds_across_triangles, rasterize_triangle,
@@ -21,55 +20,6 @@ use super::varyings::Varyings;
 use crate::simd::{self, Kernel, SimdLevel};
 use glam::Vec4;
 use rayon::prelude::*;
-
-/// The depth comparison of a draw: a fragment passes when `fragment_depth OP stored_depth`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum DepthCompare {
-    /// Always passes (no depth test).
-    Always,
-    /// Passes when strictly nearer.
-    #[default]
-    Less,
-    /// Passes when nearer or equal: lets coplanar layers drawn later win.
-    LessEqual,
-}
-
-/// How a fragment's colour combines with the framebuffer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum BlendMode {
-    /// Overwrite.
-    #[default]
-    Replace,
-    /// Colour `src·a + dst·(1 − a)`, alpha `a + dst·(1 − a)` (the "over" operator).
-    Alpha,
-    /// `src + dst` (one, one): counts overlaps, accumulates light.
-    Add,
-}
-
-/// Per-draw fixed-function state.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct DrawState {
-    /// Depth test.
-    pub depth_compare: DepthCompare,
-    /// Whether passing fragments write their depth.
-    pub depth_write: bool,
-    /// Colour blending.
-    pub blend: BlendMode,
-    /// Face culling.
-    pub cull: CullMode,
-}
-
-impl Default for DrawState {
-    /// Opaque geometry: depth test `Less`, depth write on, no blending, no culling.
-    fn default() -> Self {
-        DrawState {
-            depth_compare: DepthCompare::Less,
-            depth_write: true,
-            blend: BlendMode::Replace,
-            cull: CullMode::None,
-        }
-    }
-}
 
 /// A submitted draw with its closures erased, as the tile loop sees it.
 trait TileDraw: Send + Sync {

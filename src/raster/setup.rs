@@ -16,7 +16,7 @@
 //! coefficients are differences (< 2^30), pixel-centre steps are 256× that (< 2^38), and an edge
 //! value at any pixel of the image is a sum of products below 2^60: it fits in `i64`.
 
-use super::clip::ClipVertex;
+use super::clip::{ClipVertex, within_guard_band};
 use super::varyings::Varyings;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -160,15 +160,6 @@ pub fn snap(position: glam::Vec4, width: u32, height: u32) -> (Subpixel, f32, f3
         y: round_ties_even(sy * scale) as i64,
     };
     (snapped, ndc.z, inv_w)
-}
-
-/// Whether a clip-space position is one [`super::clip::clip_triangle`] can emit: finite, in
-/// front of the eye with a finite `1/w` (not a subnormal `w`), and inside the guard band (with
-/// a margin of one for rounding).
-#[inline]
-pub fn within_guard_band(p: glam::Vec4) -> bool {
-    let band = (super::clip::GUARD_BAND + 1.0) * p.w;
-    p.is_finite() && p.w > 0.0 && (1.0 / p.w).is_finite() && p.x.abs() <= band && p.y.abs() <= band
 }
 
 /// Sets up one clipped triangle for a `width`×`height` viewport. Returns `None` for

@@ -17,8 +17,8 @@
 //! positive fall back to the affine weights `λ_i`.
 
 use super::framebuffer::TileTarget;
-use super::pipeline::{BlendMode, DepthCompare, DrawState};
 use super::setup::{EdgeFunction, PixelRect, SetupTriangle};
+use super::state::{BlendMode, DepthCompare, DrawState};
 use super::varyings::Varyings;
 use glam::Vec4;
 
