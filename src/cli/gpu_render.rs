@@ -3,9 +3,26 @@
 //! `pelage gpu-info` lists the adapters.
 
 use super::Failure;
-use super::render::RenderArgs;
 use clap::Args;
 use pelage::scene::Scene;
+use std::path::Path;
+
+/// What `pelage render --backend gpu` asks of this module, taken from the render command's
+/// arguments by `cli::render` (which calls this module; this module does not look back).
+// Without the `gpu` feature only the refusal is built, which reads none of the fields.
+#[cfg_attr(not(feature = "gpu"), allow(dead_code))]
+pub struct GpuRequest<'a> {
+    /// The PNG to write.
+    pub output: &'a Path,
+    /// `--threads`, for the bake.
+    pub threads: Option<u32>,
+    /// Whether `--frames` was given (refused: the GPU backend renders single frames).
+    pub frames: bool,
+    /// `--api`.
+    pub api: Option<&'a str>,
+    /// `--adapter`.
+    pub adapter: Option<&'a str>,
+}
 
 #[derive(Args)]
 pub struct GpuInfoArgs {
@@ -28,30 +45,25 @@ fn gpu_failure(e: pelage::gpu::GpuError) -> Failure {
 }
 
 #[cfg(feature = "gpu")]
-pub fn run(scene: &Scene, args: &RenderArgs) -> Result<(), Failure> {
+pub fn run(scene: &Scene, args: &GpuRequest) -> Result<(), Failure> {
     use pelage::gpu::{AdapterChoice, Api, GpuContext, GpuOptions};
-    if args.frames.is_some() {
+    if args.frames {
         return Err(Failure::bad_input(
             "--frames: the GPU backend renders single frames (use --time)",
         ));
     }
-    let api = match &args.api {
+    let api = match args.api {
         Some(name) => Api::parse(name).map_err(gpu_failure)?,
         None => Api::default(),
     };
-    let choice = args
-        .adapter
-        .as_deref()
-        .map(AdapterChoice::parse)
-        .unwrap_or_default();
-    let prepared = super::with_threads(args.common.threads, || {
-        pelage::render::PreparedScene::new(scene)
-    })??;
+    let choice = args.adapter.map(AdapterChoice::parse).unwrap_or_default();
+    let prepared =
+        super::with_threads(args.threads, || pelage::render::PreparedScene::new(scene))??;
     let context = GpuContext::open(api, &choice).map_err(gpu_failure)?;
     let image = context
         .render(&prepared, scene.time, &GpuOptions::default())
         .map_err(gpu_failure)?;
-    super::write_png(&args.output, image.width(), image.height(), image.as_raw())?;
+    super::write_png(args.output, image.width(), image.height(), image.as_raw())?;
     eprintln!(
         "gpu: {} ({:?}, {:?})",
         context.adapter_info().name,
@@ -93,7 +105,7 @@ const NO_GPU: &str =
     "this pelage was built without the `gpu` feature (cargo build --release --features gpu)";
 
 #[cfg(not(feature = "gpu"))]
-pub fn run(_scene: &Scene, _args: &RenderArgs) -> Result<(), Failure> {
+pub fn run(_scene: &Scene, _args: &GpuRequest) -> Result<(), Failure> {
     Err(Failure::bad_input(format!("--backend gpu: {NO_GPU}")))
 }
 

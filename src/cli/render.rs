@@ -4,6 +4,7 @@
 //! sibling and renamed; an animation's frames go to a [`StagedFolder`] (an existing output
 //! folder that holds nothing but `frame_NNNN.png` files, a previous render, is replaced).
 
+use super::gpu_render::GpuRequest;
 use super::staged::{EntryRule, StagedFolder, parent_of};
 use super::{
     CommonArgs, Failure, check_limits, load_scene, progress, render_failure, scene_name, spinner,
@@ -81,7 +82,14 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
                 args.output.display()
             )));
         }
-        return super::gpu_render::run(&scene, &args);
+        let request = GpuRequest {
+            output: &args.output,
+            threads: args.common.threads,
+            frames: args.frames.is_some(),
+            api: args.api.as_deref(),
+            adapter: args.adapter.as_deref(),
+        };
+        return super::gpu_render::run(&scene, &request);
     }
     if args.api.is_some() || args.adapter.is_some() {
         return Err(Failure::bad_input(
