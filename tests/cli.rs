@@ -604,3 +604,58 @@ fn a_stripe_period_lost_to_precision_is_refused() {
     );
     assert!(!png.exists());
 }
+
+#[test]
+fn compare_names_a_missing_input_before_blaming_the_report_folder() {
+    let dir = scratch("missing-compare");
+    let there = dir.join("there");
+    std::fs::create_dir_all(&there).expect("folder");
+    let missing = dir.join("nowhere");
+    let report = dir.join("report");
+    for (a, b) in [(&missing, &there), (&there, &missing)] {
+        let args = [
+            "compare",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "-o",
+            report.to_str().unwrap(),
+        ];
+        let o = pelage(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("nowhere: no such image or folder"), "{err}");
+        assert!(!err.contains("-o "), "{err}");
+    }
+}
+
+#[test]
+fn export_summary_puts_the_count_before_the_list() {
+    let dir = scratch("export-summary");
+    let out = dir.join("torus-export");
+    let o = pelage(&[
+        "export",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out
+        .lines()
+        .find(|l| l.contains(" files ("))
+        .unwrap_or_else(|| panic!("no summary in {out:?}"));
+    let count: usize = line
+        .split(": ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count in {line:?}"));
+    assert!(count > 10, "{line}");
+    assert!(
+        line.contains("textures/") && !line.contains("textures/1"),
+        "{line}"
+    );
+}

@@ -74,6 +74,15 @@ fn check_pair_memory(
 pub fn run(args: CompareArgs) -> Result<(), Failure> {
     let tolerance =
         Tolerance::parse(&args.tolerance).map_err(|e| Failure::bad_input(format!("--{e}")))?;
+    // A path that does not exist is named before anything else is blamed (`-o` among them).
+    for path in [&args.reference, &args.test] {
+        if !path.exists() {
+            return Err(Failure::bad_input(format!(
+                "{}: no such image or folder",
+                path.display()
+            )));
+        }
+    }
     match (args.reference.is_dir(), args.test.is_dir()) {
         (true, true) => return compare_folders(&args, &tolerance),
         (true, false) | (false, true) => {

@@ -46,12 +46,12 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
     super::say(format!(
         "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/{})",
         args.output.display(),
+        summary.files.len(),
         if cfg!(feature = "gpu") {
             ", shaders/"
         } else {
             ""
-        },
-        summary.files.len()
+        }
     ))?;
     Ok(())
 }
