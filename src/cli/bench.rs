@@ -113,9 +113,7 @@ impl Bench<'_> {
             // again alone, on the same pool, for the share of the frame it takes.
             if self.prepared.poses() {
                 let start = Instant::now();
-                let posed = self
-                    .pool
-                    .install(|| self.prepared.mesh_at(self.scene.time));
+                let posed = self.pool.install(|| self.prepared.mesh_at(self.scene.time));
                 std::hint::black_box(&posed);
                 posing.push(start.elapsed().as_secs_f64() * 1e3);
             }
