@@ -62,11 +62,14 @@ fn load(path: &Path) -> (Scene, Vec<f32>) {
     scene.image.height = ((h * scale).round() as u32).max(2);
     let name = path.file_stem().expect("name").to_string_lossy();
     // The animated scenes at instants of the golden tests (wind swaying, fur burning, the
-    // torus flying away with fewer shells).
+    // torus flying away with fewer shells, the characters posed).
     let times = match name.as_ref() {
         "wind" => vec![0.5, 1.5],
         "burn" => vec![3.0, 6.0],
         "lod-flyaway" => vec![0.0, 0.8, 2.0, 4.0],
+        // The characters, skinned in the vertex stage, walking and wagging.
+        "fox" => vec![0.4],
+        "tail" => vec![0.5],
         _ => vec![scene.time],
     };
     (scene, times)
@@ -121,6 +124,53 @@ fn row(name: &str, c: &Comparison) -> String {
         c.flip.max,
         if c.passed() { "ok" } else { "FAIL" }
     )
+}
+
+/// A glTF model skinned in the vertex stage from the joint palette draws the frame the CPU's
+/// pose draws when uploaded, and both meet the oracle's tolerance, at the golden instants.
+#[test]
+fn vertex_stage_skinning_matches_the_cpu_pose() {
+    let context = context();
+    let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let on_cpu = GpuOptions {
+        pose_on_cpu: true,
+        ..GpuOptions::default()
+    };
+    for (name, times) in [("tail", [0.0, 0.5, 1.25]), ("fox", [0.0, 0.4, 0.8])] {
+        let (scene, _) = load(&dir.join(format!("{name}.toml")));
+        let prepared = PreparedScene::new(&scene).expect("prepare");
+        for t in times {
+            let label = format!("{name}@{t}");
+            let skinned = compare(
+                &context,
+                &prepared,
+                t,
+                &GpuOptions::default(),
+                &tolerance,
+                &format!("skinned-{label}"),
+            );
+            let posed = compare(
+                &context,
+                &prepared,
+                t,
+                &on_cpu,
+                &tolerance,
+                &format!("posed-{label}"),
+            );
+            println!("{}", row(&format!("skinned {label}"), &skinned));
+            println!("{}", row(&format!("cpu-posed {label}"), &posed));
+            let a = context
+                .render(&prepared, t, &GpuOptions::default())
+                .expect("skinned");
+            let b = context.render(&prepared, t, &on_cpu).expect("posed");
+            let between = compare_images(&b, &a, &tolerance).expect("same size");
+            println!("{}", row(&format!("skinned/posed {label}"), &between));
+            assert!(skinned.passed(), "{label}: skinned on the GPU");
+            assert!(posed.passed(), "{label}: posed on the CPU");
+            assert!(between.passed(), "{label}: skinned against posed");
+        }
+    }
 }
 
 #[test]

@@ -56,6 +56,11 @@ struct LayerUniforms {
 @group(0) @binding(4) var density_map: texture_2d<f32>;
 @group(0) @binding(5) var direction_map: texture_2d<f32>;
 @group(0) @binding(6) var tint_map: texture_2d<f32>;
+// A skinned glTF model's joint palette (render::Skinning, mesh::skin), read by the vertex stages
+// of `vs_skin_skinned` and `vs_shell_skinned` only (bound for glTF scenes): element 0 is
+// (skin inset, joint count, 0, 0); joint j's column-major 4×4 matrix (mesh.scale included) is
+// elements 1 + 4j … 4 + 4j, its columns.
+@group(0) @binding(7) var<storage, read> palette: array<vec4<f32>>;
 
 @group(1) @binding(0) var<uniform> layer: LayerUniforms;
 @group(1) @binding(1) var colour_map: texture_2d<f32>;
@@ -737,6 +742,10 @@ fn level_of_detail(ddx: vec2<f32>, ddy: vec2<f32>, size: vec2<f32>) -> f32 {
 
 // ---- the skin (render/mod.rs, first draw) -------------------------------------------------
 
+// A vertex as drawn (posed on the CPU, or by `skinned` below): mesh::Vertex. `rest_position` and
+// `rest_normal` are the rest pose's (what spots, stripes and matches are fixed to; equal to
+// position and normal for a mesh that is not posed), `lag` the vertex's own motion lag times
+// motion.response (zero but for a posed character with [motion]).
 struct MeshVertex {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
@@ -746,19 +755,172 @@ struct MeshVertex {
     @location(5) frame_normal: vec3<f32>,
     @location(6) dpdu: vec3<f32>,
     @location(7) dpdv: vec3<f32>,
+    @location(8) rest_position: vec3<f32>,
+    @location(9) rest_normal: vec3<f32>,
+    @location(10) lag: vec3<f32>,
 }
 
 struct SkinVaryings {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
+    @location(1) rest_normal: vec3<f32>,
+}
+
+// The skin's vertex closure: the posed normal lights it, the rest normal meets the matches.
+fn skin_vertex(v: MeshVertex) -> SkinVaryings {
+    var out: SkinVaryings;
+    out.clip = frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0);
+    out.normal = v.normal;
+    out.rest_normal = v.rest_normal;
+    return out;
 }
 
 @vertex
 fn vs_skin(v: MeshVertex) -> SkinVaryings {
-    var out: SkinVaryings;
-    out.clip = frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0);
-    out.normal = v.normal;
+    return skin_vertex(v);
+}
+
+// ---- skinning (mesh/skin.rs, mesh/frame.rs) ------------------------------------------------
+
+// A bind-pose vertex of a skinned glTF model with its four palette influences (weights
+// normalised at load) and the rest pose's fields (see MeshVertex).
+struct SkinnedVertex {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) dpdu: vec3<f32>,
+    @location(4) dpdv: vec3<f32>,
+    @location(5) joints: vec4<u32>,
+    @location(6) weights: vec4<f32>,
+    @location(7) rest_position: vec3<f32>,
+    @location(8) rest_normal: vec3<f32>,
+    @location(9) lag: vec3<f32>,
+}
+
+// Column c of joint j's palette matrix; a joint past the palette counts as the identity (as
+// Influences::blend).
+fn palette_column(j: u32, c: u32) -> vec4<f32> {
+    if (f32(j) >= palette[0].y) {
+        var identity = vec4<f32>(0.0);
+        identity[c] = 1.0;
+        return identity;
+    }
+    return palette[1u + 4u * j + c];
+}
+
+// Influences::blend, column c: ((w0·P[j0] + w1·P[j1]) + w2·P[j2]) + w3·P[j3].
+fn blend_column(joints: vec4<u32>, weights: vec4<f32>, c: u32) -> vec3<f32> {
+    let a = weights.x * palette_column(joints.x, c).xyz;
+    let b = weights.y * palette_column(joints.y, c).xyz;
+    let d = weights.z * palette_column(joints.z, c).xyz;
+    let e = weights.w * palette_column(joints.w, c).xyz;
+    return ((a + b) + d) + e;
+}
+
+// u × v as Affine::transform_normal writes it.
+fn cross_pelage(u: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x);
+}
+
+fn dot_pelage(u: vec3<f32>, v: vec3<f32>) -> f32 {
+    return (u.x * v.x + u.y * v.y) + u.z * v.z;
+}
+
+// frame.rs orthogonal_part: v without its part along unit n, normalised twice; w = 0 when that is
+// (almost) zero or v is zero or not finite.
+fn orthogonal_part(v: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
+    let len = length(v);
+    if (!(len <= 3.4028235e38) || len <= 1.17549435e-38) {
+        return vec4<f32>(0.0);
+    }
+    let u = v / len;
+    let t = u - n * dot(n, u);
+    if (dot(t, t) < 1.0e-8) {
+        return vec4<f32>(0.0);
+    }
+    let t1 = normalize(t);
+    return vec4<f32>(normalize(t1 - n * dot(n, t1)), 1.0);
+}
+
+// frame.rs arbitrary_tangent: the axis least aligned with n (ties x, y, z), orthogonalised.
+fn arbitrary_tangent(n: vec3<f32>) -> vec3<f32> {
+    let a = abs(n);
+    var axis = vec3<f32>(0.0, 0.0, 1.0);
+    if (a.x <= a.y && a.x <= a.z) {
+        axis = vec3<f32>(1.0, 0.0, 0.0);
+    } else if (a.y <= a.z) {
+        axis = vec3<f32>(0.0, 1.0, 0.0);
+    }
+    return normalize(axis - n * dot(n, axis));
+}
+
+// TangentFrame::from_derivatives: T = dpdu orthogonalised against N (else from dpdv, else an
+// arbitrary tangent), B = N × T flipped against dpdv.
+fn frame_from_derivatives(n: vec3<f32>, dpdu: vec3<f32>, dpdv: vec3<f32>) -> TangentFrame {
+    var t = arbitrary_tangent(n);
+    let from_u = orthogonal_part(dpdu, n);
+    let from_v = orthogonal_part(dpdv, n);
+    if (from_u.w != 0.0) {
+        t = from_u.xyz;
+    } else if (from_v.w != 0.0) {
+        t = normalize(cross(from_v.xyz, n));
+    }
+    var b = cross(n, t);
+    if (dot(b, dpdv) < 0.0) {
+        b = -b;
+    }
+    return TangentFrame(t, b, n);
+}
+
+// skin::pose_vertex and render's inset: the vertex through its blended matrix M (position M·p,
+// derivatives M₃·d, normal the cofactor of M₃ times n, negated where det M₃ < 0, normalised),
+// moved by the skin inset along the posed normal, its frame rebuilt.
+fn skinned(v: SkinnedVertex) -> MeshVertex {
+    let c0 = blend_column(v.joints, v.weights, 0u);
+    let c1 = blend_column(v.joints, v.weights, 1u);
+    let c2 = blend_column(v.joints, v.weights, 2u);
+    let c3 = blend_column(v.joints, v.weights, 3u);
+    let p = v.position;
+    let position = ((c0 * p.x + c1 * p.y) + c2 * p.z) + c3;
+    let dpdu = (c0 * v.dpdu.x + c1 * v.dpdu.y) + c2 * v.dpdu.z;
+    let dpdv = (c0 * v.dpdv.x + c1 * v.dpdv.y) + c2 * v.dpdv.z;
+    // The rows of M₃ and their cofactors.
+    let a0 = vec3<f32>(c0.x, c1.x, c2.x);
+    let a1 = vec3<f32>(c0.y, c1.y, c2.y);
+    let a2 = vec3<f32>(c0.z, c1.z, c2.z);
+    let k0 = cross_pelage(a1, a2);
+    let k1 = cross_pelage(a2, a0);
+    let k2 = cross_pelage(a0, a1);
+    var m = vec3<f32>(dot_pelage(k0, v.normal), dot_pelage(k1, v.normal),
+                      dot_pelage(k2, v.normal));
+    if (dot_pelage(a0, k0) < 0.0) {
+        m = -m;
+    }
+    // glam's try_normalize: the bind normal where the length is zero or not finite.
+    var normal = v.normal;
+    let inv = 1.0 / length(m);
+    if (inv > 0.0 && inv <= 3.4028235e38) {
+        normal = m * inv;
+    }
+    let f = frame_from_derivatives(normal, dpdu, dpdv);
+    var out: MeshVertex;
+    out.position = position + normal * palette[0].x;
+    out.normal = normal;
+    out.uv = v.uv;
+    out.frame_tangent = f.tangent;
+    out.frame_binormal = f.binormal;
+    out.frame_normal = f.normal;
+    out.dpdu = dpdu;
+    out.dpdv = dpdv;
+    out.rest_position = v.rest_position;
+    out.rest_normal = v.rest_normal;
+    out.lag = v.lag;
     return out;
+}
+
+@vertex
+fn vs_skin_skinned(v: SkinnedVertex) -> SkinVaryings {
+    return skin_vertex(skinned(v));
 }
 
 // The skin: the fur colour darkened, charred where the fur burns: colour·(0.5 + 0.5·max(0, n·l)).
@@ -768,7 +930,8 @@ fn fs_skin(v: SkinVaryings) -> @location(0) vec4<f32> {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
     let n = normalize_or_zero(v.normal);
-    let colour = strand_colour_after_burn(burn_outcome(n, 0u, layer.max_shell), frame.skin_colour.xyz);
+    let rest = normalize_or_zero(v.rest_normal);
+    let colour = strand_colour_after_burn(burn_outcome(rest, 0u, layer.max_shell), frame.skin_colour.xyz);
     return vec4<f32>(colour * (0.5 + 0.5 * max(dot(n, frame.light.xyz), 0.0)), 1.0);
 }
 
@@ -795,8 +958,9 @@ struct FurVaryings {
 // length map), moved by the wind (3.3) or, with a lean, by the wind's bend plus the lean, and by
 // the object's path offset; eye and light into tangent space (3.2.1), the shadow step projected
 // to uv (3.2.2).
-@vertex
-fn vs_shell(v: MeshVertex) -> FurVaryings {
+// Spots, stripes and matches read the rest pose's position and normal; a posed character's own
+// lag joins the lean.
+fn shell_vertex(v: MeshVertex) -> FurVaryings {
     let tf = TangentFrame(v.frame_tangent, v.frame_binormal, v.frame_normal);
     let repeat = frame.fur.xy;
     let light = frame.light.xyz;
@@ -817,7 +981,7 @@ fn vs_shell(v: MeshVertex) -> FurVaryings {
         if (has_wind) {
             wind_bend = direction * clamp(force, -1.0, 1.0);
         }
-        let lean = lean_at(v.uv, tf);
+        let lean = lean_at(v.uv, tf) + v.lag;
         displacement = lean_displacement(wind_bend + lean, v.normal, layer.height_fraction,
                                          strand_height);
         lean_ts = to_tangent_space(lean, tf);
@@ -847,14 +1011,25 @@ fn vs_shell(v: MeshVertex) -> FurVaryings {
     out.eye = to_tangent_space(eye - p, tf);
     out.shadow = project_to_uv(change, v.dpdu / repeat.x, v.dpdv / repeat.y);
     out.fade = 1.0;
-    out.object = v.position;
-    out.normal = v.normal;
+    out.object = v.rest_position;
+    out.normal = v.rest_normal;
     out.wind_uv = wind_uv;
     out.wind = wind_ts;
     out.mesh_uv = v.uv;
     out.length = fur_length;
     out.lean = lean_ts;
     return out;
+}
+
+@vertex
+fn vs_shell(v: MeshVertex) -> FurVaryings {
+    return shell_vertex(v);
+}
+
+// The shells of a skinned model: the bind vertex skinned by the palette, then the same closure.
+@vertex
+fn vs_shell_skinned(v: SkinnedVertex) -> FurVaryings {
+    return shell_vertex(skinned(v));
 }
 
 struct FinVertex {

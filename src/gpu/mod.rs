@@ -179,6 +179,10 @@ pub struct GpuOptions {
     /// per pixel, within the device's storage buffer limit. A draw that lists more makes
     /// [`GpuFrame::read_back`] fail, saying how many it had.
     pub list_capacity: Option<u32>,
+    /// For a glTF model, upload the mesh posed on the CPU ([`PreparedScene::mesh_at`]) instead
+    /// of skinning it in the vertex stage from the joint palette (the default; tests compare the
+    /// two).
+    pub pose_on_cpu: bool,
 }
 
 /// A wgpu device and queue, made once and reused for many frames.
@@ -189,6 +193,8 @@ pub struct GpuContext {
     target_format: wgpu::TextureFormat,
     blending: Blending,
     api: Api,
+    /// Whether the vertex stage can read storage buffers (skinning from the palette).
+    vertex_storage: bool,
 }
 
 /// How the fur's layers are blended.
@@ -209,6 +215,12 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// Floats per fin vertex: position and the `FinVertex` varyings of `fur.wgsl`.
 const FIN_FLOATS: usize = 31;
+
+/// Floats per posed mesh vertex: the `MeshVertex` of `fur.wgsl`.
+const MESH_FLOATS: usize = 32;
+
+/// 4-byte words per bind vertex of a skinned model: the `SkinnedVertex` of `fur.wgsl`.
+const SKINNED_WORDS: usize = 31;
 
 impl GpuContext {
     /// Opens a Vulkan adapter (see [`AdapterChoice`]) and creates a device on it.
@@ -279,6 +291,15 @@ impl GpuContext {
         let info = adapter.get_info();
         let (mut features, mut target_format) = target_choice(&adapter);
         let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+        // A skinned model's palette is one more storage buffer, read by the vertex stage: where
+        // the adapter cannot, its mesh is posed on the CPU.
+        limits.max_storage_buffers_per_shader_stage = limits
+            .max_storage_buffers_per_shader_stage
+            .max(adapter.limits().max_storage_buffers_per_shader_stage);
+        let vertex_storage = adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::VERTEX_STORAGE);
         let list_features =
             wgpu::Features::PRIMITIVE_INDEX | wgpu::Features::SHADER_EARLY_DEPTH_TEST;
         let list_flags =
@@ -314,7 +335,14 @@ impl GpuContext {
             target_format,
             blending,
             api,
+            vertex_storage,
         })
+    }
+
+    /// Whether a glTF model is skinned in the vertex stage from its joint palette (the vertex
+    /// stage can read storage buffers); otherwise its mesh is uploaded posed by the CPU.
+    pub fn skins_in_vertex_stage(&self) -> bool {
+        self.vertex_storage
     }
 
     /// The API drawn through.
@@ -380,10 +408,25 @@ impl GpuContext {
         let device = &self.device;
         let s = prepared.scene();
         let (width, height) = (s.image.width, s.image.height);
-        let mesh = prepared.mesh_at(time);
+        // A glTF model is skinned in the vertex stage from the frame's palette (unless the
+        // options ask for the CPU's pose); every other mesh is uploaded as it is drawn.
+        let skinning = if options.pose_on_cpu || !self.vertex_storage {
+            None
+        } else {
+            prepared.skinning_at(time)
+        };
+        let mesh = match &skinning {
+            // The posed mesh only for its lags (a character with [motion]).
+            Some(_) if !(prepared.poses() && s.motion.is_some()) => {
+                std::borrow::Cow::Borrowed(prepared.mesh())
+            }
+            _ => prepared.mesh_at(time),
+        };
         if mesh.vertices.is_empty() || mesh.indices.is_empty() {
             return Err(GpuError::Scene("the mesh has no triangles".into()));
         }
+        // `motion.response` times each vertex's lag, as the oracle's lean adds it.
+        let response = s.motion.as_ref().map_or(1.0, |m| m.response);
         let source = options.shader.as_deref().unwrap_or(SHADER_SOURCE);
         let source = match self.api {
             Api::Vulkan => source.to_string(),
@@ -432,36 +475,55 @@ impl GpuContext {
             map_view(&surface.direction),
             map_view(&surface.colour),
         ];
+        // The joint palette of a skinned model (binding 7, the vertex stage only): a header
+        // (skin inset, joint count) and each column-major matrix's four columns.
+        let palette_buffer = skinning.as_ref().map(|k| {
+            let mut floats = vec![s.fur.skin_inset(), k.palette.len() as f32, 0.0, 0.0];
+            floats.extend(k.palette.iter().flatten());
+            self.storage(&floats, "palette")
+        });
+        let mut frame_entries = vec![
+            layout_entry(0, buffer_binding(wgpu::BufferBindingType::Uniform)),
+            layout_entry(
+                1,
+                buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+            ),
+            layout_entry(
+                2,
+                buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+            ),
+            layout_entry(3, texture_binding()),
+            layout_entry(4, texture_binding()),
+            layout_entry(5, texture_binding()),
+            layout_entry(6, texture_binding()),
+        ];
+        let mut frame_bindings = vec![
+            bind(0, &frame_buffer),
+            bind(1, &spot_buffer),
+            bind(2, &match_buffer),
+            bind_view(3, &map_views[0]),
+            bind_view(4, &map_views[1]),
+            bind_view(5, &map_views[2]),
+            bind_view(6, &map_views[3]),
+        ];
+        if let Some(buffer) = &palette_buffer {
+            frame_entries.push(wgpu::BindGroupLayoutEntry {
+                visibility: wgpu::ShaderStages::VERTEX,
+                ..layout_entry(
+                    7,
+                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+                )
+            });
+            frame_bindings.push(bind(7, buffer));
+        }
         let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("frame"),
-            entries: &[
-                layout_entry(0, buffer_binding(wgpu::BufferBindingType::Uniform)),
-                layout_entry(
-                    1,
-                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
-                ),
-                layout_entry(
-                    2,
-                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
-                ),
-                layout_entry(3, texture_binding()),
-                layout_entry(4, texture_binding()),
-                layout_entry(5, texture_binding()),
-                layout_entry(6, texture_binding()),
-            ],
+            entries: &frame_entries,
         });
         let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("frame"),
             layout: &frame_layout,
-            entries: &[
-                bind(0, &frame_buffer),
-                bind(1, &spot_buffer),
-                bind(2, &match_buffer),
-                bind_view(3, &map_views[0]),
-                bind_view(4, &map_views[1]),
-                bind_view(5, &map_views[2]),
-                bind_view(6, &map_views[3]),
-            ],
+            entries: &frame_bindings,
         });
 
         // Group 1: layer uniforms, colour map, tangent map, sampler, density bands.
@@ -576,23 +638,51 @@ impl GpuContext {
             })
             .collect();
 
-        // Vertex data: the mesh (skin and shells), the fin quads of this frame.
-        let mesh_floats: Vec<f32> = mesh
-            .vertices
-            .iter()
-            .flat_map(|v| {
-                let mut out = Vec::with_capacity(23);
-                out.extend(v.position.to_array());
-                out.extend(v.normal.to_array());
-                out.extend(v.uv.to_array());
-                out.extend(v.frame.tangent.to_array());
-                out.extend(v.frame.binormal.to_array());
-                out.extend(v.frame.normal.to_array());
-                out.extend(v.dpdu.to_array());
-                out.extend(v.dpdv.to_array());
-                out
-            })
-            .collect();
+        // Vertex data: the mesh (skin and shells), the fin quads of this frame. A skinned
+        // model's bind vertices with their influences (joint indices as u32 bits), the rest
+        // pose's fields and the frame's lag; any other mesh as drawn.
+        let mesh_floats: Vec<f32> = match &skinning {
+            Some(k) => k
+                .bind
+                .vertices
+                .iter()
+                .zip(&k.influences)
+                .zip(&mesh.vertices)
+                .flat_map(|((b, i), v)| {
+                    let mut out = Vec::with_capacity(SKINNED_WORDS);
+                    out.extend(b.position.to_array());
+                    out.extend(b.normal.to_array());
+                    out.extend(b.uv.to_array());
+                    out.extend(b.dpdu.to_array());
+                    out.extend(b.dpdv.to_array());
+                    out.extend(i.joints.map(f32::from_bits));
+                    out.extend(i.weights);
+                    out.extend(v.rest_position.to_array());
+                    out.extend(v.rest_normal.to_array());
+                    out.extend((v.lag * response).to_array());
+                    out
+                })
+                .collect(),
+            None => mesh
+                .vertices
+                .iter()
+                .flat_map(|v| {
+                    let mut out = Vec::with_capacity(MESH_FLOATS);
+                    out.extend(v.position.to_array());
+                    out.extend(v.normal.to_array());
+                    out.extend(v.uv.to_array());
+                    out.extend(v.frame.tangent.to_array());
+                    out.extend(v.frame.binormal.to_array());
+                    out.extend(v.frame.normal.to_array());
+                    out.extend(v.dpdu.to_array());
+                    out.extend(v.dpdv.to_array());
+                    out.extend(v.rest_position.to_array());
+                    out.extend(v.rest_normal.to_array());
+                    out.extend((v.lag * response).to_array());
+                    out
+                })
+                .collect(),
+        };
         let mesh_buffer = self.vertex_buffer(&mesh_floats, "mesh");
         let index_buffer = self.index_buffer(&mesh.indices, "mesh indices");
         let mesh_index_count = (mesh.indices.len() * 3) as u32;
@@ -666,17 +756,34 @@ impl GpuContext {
         });
         let mesh_attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x3,
-            4 => Float32x3, 5 => Float32x3, 6 => Float32x3, 7 => Float32x3
+            4 => Float32x3, 5 => Float32x3, 6 => Float32x3, 7 => Float32x3,
+            8 => Float32x3, 9 => Float32x3, 10 => Float32x3
+        ];
+        let skinned_attributes = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x3,
+            4 => Float32x3, 5 => Uint32x4, 6 => Float32x4, 7 => Float32x3,
+            8 => Float32x3, 9 => Float32x3
         ];
         let fin_attributes = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x2, 2 => Float32x3, 3 => Float32x3, 4 => Float32x2,
             5 => Float32, 6 => Float32x3, 7 => Float32x3, 8 => Float32x2, 9 => Float32x3,
             10 => Float32x2, 11 => Float32, 12 => Float32x3
         ];
-        let mesh_vertex = wgpu::VertexBufferLayout {
-            array_stride: 23 * 4,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &mesh_attributes,
+        let mesh_vertex = match &skinning {
+            Some(_) => wgpu::VertexBufferLayout {
+                array_stride: (SKINNED_WORDS * 4) as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &skinned_attributes,
+            },
+            None => wgpu::VertexBufferLayout {
+                array_stride: (MESH_FLOATS * 4) as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &mesh_attributes,
+            },
+        };
+        let (vs_skin, vs_shell) = match &skinning {
+            Some(_) => ("vs_skin_skinned", "vs_shell_skinned"),
+            None => ("vs_skin", "vs_shell"),
         };
         let fin_vertex = wgpu::VertexBufferLayout {
             array_stride: (FIN_FLOATS * 4) as u64,
@@ -762,7 +869,7 @@ impl GpuContext {
             )
         };
         let skin_pipeline = pipeline(
-            "vs_skin",
+            vs_skin,
             skin_fs,
             &mesh_vertex,
             Some(skin_target),
@@ -771,7 +878,7 @@ impl GpuContext {
             Some(wgpu::Face::Back),
         );
         let shell_pipeline = pipeline(
-            "vs_shell",
+            vs_shell,
             fur_fs,
             &mesh_vertex,
             fur_target,

@@ -8,14 +8,15 @@
 //!   (group, binding) order; textures and their sampler are combined (`sampler2D`); the sampler
 //!   has no slot of its own (set its state on the texture units of the textures it samples).
 //!   GLSL ES 3.00 has no storage buffers, no level query and no explicit binding numbers: its
-//!   variant of the shader ([`es300_source`]) holds the spots and matches in uniform arrays of
-//!   fixed capacity ([`ES300_MAX_SPOTS`], [`ES300_MAX_MATCHES`]), computes the mip level count
+//!   variant of the shader ([`es300_source`]) holds the spots, matches and joint palette in
+//!   uniform arrays of fixed capacity ([`ES300_MAX_SPOTS`], [`ES300_MAX_MATCHES`],
+//!   [`ES300_MAX_JOINTS`]), computes the mip level count
 //!   from the texture size ([`without_level_query`]), and its resources are bound by name.
 //! - **HLSL**: `b` registers for uniform buffers, `t` for textures and read-only storage
 //!   buffers (`ByteAddressBuffer`), all in space 0; samplers go through naga's sampler heap
 //!   (see `bindings.md`).
 //! - **MSL**: `buffer(n)` for uniform and storage buffers, `texture(n)`, `sampler(n)`, and a
-//!   sizes buffer for the two runtime-sized arrays; vertex attributes are `[[attribute(L)]]`
+//!   sizes buffer for the three runtime-sized arrays; vertex attributes are `[[attribute(L)]]`
 //!   with L the WGSL location.
 //! - **SPIR-V**: descriptor set = WGSL group, binding = WGSL binding; one module with every
 //!   entry point.
@@ -36,9 +37,20 @@ use std::collections::BTreeMap;
 pub const ES300_MAX_SPOTS: usize = 64;
 /// Burning matches the GLSL ES 3.00 variant holds.
 pub const ES300_MAX_MATCHES: usize = 64;
+/// Joints of a skinned model the GLSL ES 3.00 variant holds (its palette is a uniform array of
+/// 1 + 4 × this many `vec4`).
+pub const ES300_MAX_JOINTS: usize = 64;
 
 /// The entry points of `fur.wgsl`, in the order they are written down.
-pub const ENTRY_POINTS: [&str; 5] = ["vs_skin", "fs_skin", "vs_shell", "vs_fin", "fs_fur"];
+pub const ENTRY_POINTS: [&str; 7] = [
+    "vs_skin",
+    "fs_skin",
+    "vs_skin_skinned",
+    "vs_shell",
+    "vs_shell_skinned",
+    "vs_fin",
+    "fs_fur",
+];
 
 /// The folders [`translate_all`] fills, under `shaders/`.
 pub const LANGUAGES: [&str; 5] = ["glsl-450", "glsl-es-300", "hlsl", "msl", "spirv"];
@@ -187,7 +199,7 @@ fn es300_levels(t: texture_2d<f32>) -> u32 {
 }
 ";
 
-/// `fur.wgsl` with the spots and matches in uniform arrays of fixed capacity instead of storage
+/// `fur.wgsl` with the spots, matches and joint palette in uniform arrays of fixed capacity instead of storage
 /// buffers, and the mip level count computed from the texture size instead of queried (GLSL ES
 /// 3.00 and WebGL 2 have neither). Same bindings, same code otherwise.
 pub fn es300_source() -> Result<String, GpuError> {
@@ -202,6 +214,13 @@ pub fn es300_source() -> Result<String, GpuError> {
         (
             "var<storage, read> matches: array<vec4<f32>>;",
             format!("var<uniform> matches: array<vec4<f32>, {ES300_MAX_MATCHES}>;"),
+        ),
+        (
+            "var<storage, read> palette: array<vec4<f32>>;",
+            format!(
+                "var<uniform> palette: array<vec4<f32>, {}>;",
+                1 + 4 * ES300_MAX_JOINTS
+            ),
         ),
     ];
     let mut source = SHADER_SOURCE.to_string();
@@ -609,7 +628,7 @@ fn notes(language: &str, table: &[Resource]) -> Vec<String> {
         ],
         "glsl-es-300" => vec![
             format!("{clip}, kept as is: without clip control ES maps z ∈ [0, 1] to depth [0.5, 1]; the depth test still orders fragments the same way."),
-            format!("This folder's fur.wgsl is the variant translated: spots and matches are uniform arrays (at most {ES300_MAX_SPOTS} spots, 4 vec4 each, and {ES300_MAX_MATCHES} matches; upload them as uniform blocks padded to the full size), and the mip level count is computed from the size of level 0 (upload every level down to 1×1, as exported)."),
+            format!("This folder's fur.wgsl is the variant translated: spots, matches and the joint palette are uniform arrays (at most {ES300_MAX_SPOTS} spots, 4 vec4 each, {ES300_MAX_MATCHES} matches and {ES300_MAX_JOINTS} joints, 1 + 4 vec4 each; upload them as uniform blocks padded to the full size), and the mip level count is computed from the size of level 0 (upload every level down to 1×1, as exported)."),
             "No explicit bindings in ES 3.00: bind by the GLSL names listed per file (glGetUniformBlockIndex + glUniformBlockBinding, glUniform1i on each sampler2D, glBindAttribLocation for vertex inputs).".into(),
             "Window row 0 is the bottom row in GL: flip rows when reading back.".into(),
         ],
@@ -621,7 +640,7 @@ fn notes(language: &str, table: &[Resource]) -> Vec<String> {
         ],
         "msl" => vec![
             format!("{clip}, as Metal's: no change."),
-            format!("buffer({sizes}) is the sizes buffer: uint byte sizes of spots then matches (the runtime-sized arrays, in declaration order)."),
+            format!("buffer({sizes}) is the sizes buffer: uint byte sizes of spots, matches then palette (the runtime-sized arrays, in declaration order)."),
             "Vertex attributes are [[attribute(L)]] with L the WGSL location; give the vertex buffers buffer indices above the sizes buffer in the MTLVertexDescriptor.".into(),
         ],
         "spirv" => vec![
