@@ -123,7 +123,7 @@ fn bindings_name_every_resource_with_the_slot_the_code_uses() {
         .iter()
         .filter(|(_, g)| g.binding.is_some())
         .count();
-    assert_eq!(bound, 12, "fur.wgsl's resources changed: update this test");
+    assert_eq!(bound, 13, "fur.wgsl's resources changed: update this test");
     let scene = common::scene("torus", 16, 16);
     let prepared = pelage::render::PreparedScene::new(&scene).expect("prepare");
     let uploaded = pelage::gpu::frame_uniforms(&prepared, scene.time).len();
@@ -235,7 +235,10 @@ fn glsl_passes_glslang() {
             failures.push(e);
         }
     }
-    assert_eq!(checked, 10, "5 entry points × 2 GLSL versions");
+    assert_eq!(
+        checked, 14,
+        "7 entry points (two of them skinned) × 2 GLSL versions"
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     // The check can fail: a shader with a type error is rejected.
     let broken = dir.join("broken.frag");
