@@ -455,6 +455,21 @@ pub fn decode_base64(s: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
+/// Whether `node` or one of its ancestors satisfies `is` (the hierarchy has no cycles: checked
+/// when the skeleton is built).
+fn has_ancestor(skeleton: &Skeleton, node: usize, is: impl Fn(usize) -> bool) -> bool {
+    let mut k = node;
+    loop {
+        if is(k) {
+            return true;
+        }
+        match skeleton.parents[k] {
+            Some(p) => k = p,
+            None => return false,
+        }
+    }
+}
+
 /// One component read as f32 (normalised integers as the specification maps them).
 fn component(data: &[u8], ty: DataType, normalized: bool) -> f32 {
     match ty {
@@ -761,26 +776,12 @@ impl Loader<'_> {
         let (skeleton, roots) = self.skeleton()?;
         // The nodes whose meshes are drawn, in the composition order.
         let chosen: Vec<usize> = match node {
-            None => {
-                let in_scene = |n: usize| {
-                    let mut k = n;
-                    loop {
-                        if roots.contains(&k) {
-                            return true;
-                        }
-                        match skeleton.parents[k] {
-                            Some(p) => k = p,
-                            None => return false,
-                        }
-                    }
-                };
-                skeleton
-                    .order
-                    .iter()
-                    .copied()
-                    .filter(|&n| in_scene(n))
-                    .collect()
-            }
+            None => skeleton
+                .order
+                .iter()
+                .copied()
+                .filter(|&n| has_ancestor(&skeleton, n, |k| roots.contains(&k)))
+                .collect(),
             Some(name) => {
                 let matches: Vec<usize> = (0..skeleton.names.len())
                     .filter(|&n| skeleton.names[n] == name)
@@ -800,23 +801,11 @@ impl Loader<'_> {
                         ));
                     }
                 };
-                let under = |n: usize| {
-                    let mut k = n;
-                    loop {
-                        if k == top {
-                            return true;
-                        }
-                        match skeleton.parents[k] {
-                            Some(p) => k = p,
-                            None => return false,
-                        }
-                    }
-                };
                 skeleton
                     .order
                     .iter()
                     .copied()
-                    .filter(|&n| under(n))
+                    .filter(|&n| has_ancestor(&skeleton, n, |k| k == top))
                     .collect()
             }
         };
