@@ -44,9 +44,18 @@ pub fn run(args: ExportArgs) -> Result<(), Failure> {
     })??;
     folder.commit()?;
     super::say(format!(
-        "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, textures/{})",
+        "{}: {} files (scene.json, oracle.png, meshes/fur.gltf, {}textures/{})",
         args.output.display(),
         summary.files.len(),
+        if summary
+            .files
+            .iter()
+            .any(|f| f.as_path() == std::path::Path::new("meshes/character.gltf"))
+        {
+            "meshes/character.gltf, meshes/joints.json, "
+        } else {
+            ""
+        },
         if cfg!(feature = "gpu") {
             ", shaders/"
         } else {

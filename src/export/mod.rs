@@ -5,6 +5,8 @@
 //! DIR/scene.json                       every parameter and uniform (see below)
 //! DIR/oracle.png                       the oracle's render of this frame
 //! DIR/meshes/fur.gltf, fur.bin         skin, every shell layer, this frame's fins (glTF 2.0)
+//! DIR/meshes/character.gltf, .bin      a glTF model's bind mesh, skin and clip, and
+//! DIR/meshes/joints.json               this frame's joint matrices ([`character`])
 //! DIR/textures/shell_NN_colour.png     shell layer NN (root = 00), mip level 0
 //! DIR/textures/shell_NN_tangent.png
 //! DIR/textures/shell_NN_density.png    shell NN's density bands (scenes with a density map)
@@ -67,6 +69,8 @@
 //! `layers` the per-shell uniforms (offset, shadow lookups, height fraction, LOD span, texture
 //! files); `maps` the surface map files; `fin`, `pipeline` (depth, blend, cull, samplers) and
 //! `conventions` say the rest.
+
+pub mod character;
 
 use crate::camera::Camera;
 use crate::raster::Texture;
@@ -269,6 +273,28 @@ pub fn export(
     let text = serde_json::to_string_pretty(&gltf).expect("JSON of plain values");
     w.write("meshes/fur.gltf", text.as_bytes())?;
 
+    // A glTF model: written back with its skin and clip, and the frame's joint matrices.
+    let colour_texture = maps
+        .get("colour")
+        .and_then(Value::as_str)
+        .filter(|_| prepared.scene().fur.colour_from_mesh)
+        .map(str::to_string);
+    let model =
+        character::character(prepared, time, colour_texture.as_deref()).map_err(|message| {
+            ExportError::Write {
+                path: dir.join("meshes/character.gltf"),
+                message,
+            }
+        })?;
+    let has_character = model.is_some();
+    if let Some(model) = model {
+        w.write("meshes/character.bin", &model.bin)?;
+        let text = serde_json::to_string_pretty(&model.gltf).expect("JSON of plain values");
+        w.write("meshes/character.gltf", text.as_bytes())?;
+        let text = serde_json::to_string_pretty(&model.joints).expect("JSON of plain values");
+        w.write("meshes/joints.json", text.as_bytes())?;
+    }
+
     // The shader in every GPU language, with its bindings (feature `gpu`).
     #[cfg(feature = "gpu")]
     for file in crate::gpu::translate::translate_all().map_err(|e| ExportError::Write {
@@ -278,7 +304,11 @@ pub fn export(
         w.write(&format!("shaders/{}", file.path), &file.bytes)?;
     }
 
-    let json = scene_json(prepared, time, layers, fin, Value::Object(maps));
+    let mut json = scene_json(prepared, time, layers, fin, Value::Object(maps));
+    if has_character {
+        json["files"]["character"] = json!("meshes/character.gltf");
+        json["files"]["joints"] = json!("meshes/joints.json");
+    }
     let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
     w.write("scene.json", text.as_bytes())?;
     Ok(ExportSummary { files: w.files })
@@ -586,33 +616,51 @@ impl GltfBuilder {
         }
     }
 
-    fn view(&mut self, offset: usize, target: gj::buffer::Target) -> gj::Index<gj::buffer::View> {
+    /// The bytes from `offset` to the end as a buffer view; `target` only for vertex attributes
+    /// and indices (animation keys and inverse bind matrices have none).
+    fn view(
+        &mut self,
+        offset: usize,
+        target: Option<gj::buffer::Target>,
+    ) -> gj::Index<gj::buffer::View> {
         self.root.push(gj::buffer::View {
             buffer: gj::Index::new(0),
             byte_length: (self.bin.len() - offset).into(),
             byte_offset: Some(offset.into()),
             byte_stride: None,
             name: None,
-            target: Some(checked(target)),
+            target: target.map(checked),
             extensions: None,
             extras: None,
         })
     }
 
-    /// Float vectors of `n` components; returns the accessor. `bounds` adds min/max (required
+    /// Float vectors of `n` components (1 to 4, or 16 for a 4×4 matrix); returns the accessor. `bounds` adds min/max (required
     /// on POSITION).
     fn floats(&mut self, data: &[f32], n: usize, bounds: bool) -> gj::Index<gj::Accessor> {
+        self.floats_in(data, n, bounds, Some(gj::buffer::Target::ArrayBuffer))
+    }
+
+    /// [`Self::floats`] in a buffer view with this `target`.
+    fn floats_in(
+        &mut self,
+        data: &[f32],
+        n: usize,
+        bounds: bool,
+        target: Option<gj::buffer::Target>,
+    ) -> gj::Index<gj::Accessor> {
         self.align();
         let offset = self.bin.len();
         for v in data {
             self.bin.extend_from_slice(&v.to_le_bytes());
         }
-        let view = self.view(offset, gj::buffer::Target::ArrayBuffer);
+        let view = self.view(offset, target);
         let kind = match n {
             1 => gj::accessor::Type::Scalar,
             2 => gj::accessor::Type::Vec2,
             3 => gj::accessor::Type::Vec3,
-            _ => gj::accessor::Type::Vec4,
+            4 => gj::accessor::Type::Vec4,
+            _ => gj::accessor::Type::Mat4,
         };
         let (mut min, mut max) = (None, None);
         if bounds {
@@ -661,7 +709,7 @@ impl GltfBuilder {
         for i in triangles.iter().flatten() {
             self.bin.extend_from_slice(&i.to_le_bytes());
         }
-        let view = self.view(offset, gj::buffer::Target::ElementArrayBuffer);
+        let view = self.view(offset, Some(gj::buffer::Target::ElementArrayBuffer));
         self.root.push(gj::Accessor {
             buffer_view: Some(view),
             byte_offset: None,

@@ -153,6 +153,19 @@ pub struct Skinning {
     pub bind: Mesh,
 }
 
+/// A glTF model as loaded (see [`PreparedScene::character`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CharacterView<'a> {
+    /// The vertices as the file binds them (before posing and before the skin inset).
+    pub bind: &'a Mesh,
+    /// Hierarchy, palette and per-vertex influences.
+    pub rig: &'a mesh::skin::Rig,
+    /// The clip `[animation]` plays, with its `speed` and `loop`; `None`: the rest pose.
+    pub clip: Option<(&'a mesh::animation::Clip, f32, bool)>,
+    /// How far the posed skin is moved along its normals (`fur.skin_inset`).
+    pub skin_inset: f32,
+}
+
 /// A scene with its mesh built and its fur baked, ready to draw frames.
 pub struct PreparedScene {
     scene: Scene,
@@ -737,6 +750,22 @@ impl PreparedScene {
                 .collect(),
             influences: posing.rig.influences.clone(),
             bind: posing.bind.clone(),
+        })
+    }
+
+    /// A glTF model as it was loaded, for writing it back out (`pelage export`): the bind
+    /// mesh, the rig and the clip `[animation]` plays. `None` for meshes that are not glTF
+    /// models.
+    pub fn character(&self) -> Option<CharacterView<'_>> {
+        let posing = self.character.as_ref()?;
+        Some(CharacterView {
+            bind: &posing.bind,
+            rig: &posing.rig,
+            clip: posing
+                .clip
+                .as_ref()
+                .map(|(clip, speed, looping)| (clip, *speed, *looping)),
+            skin_inset: posing.inset,
         })
     }
 
