@@ -1,5 +1,5 @@
-//! The camera: a right-handed look-at view and a perspective projection with depth in [0, 1]
-//! (the wgpu/Vulkan/D3D clip convention `0 ≤ z ≤ w`).
+//! The camera (mesh stage): a right-handed look-at view and a perspective projection with depth in
+//! [0, 1] (the wgpu/Vulkan/D3D clip convention `0 ≤ z ≤ w`).
 //!
 //! The matrices are written out here, rather than taken from a library, so that a GPU
 //! implementation can build bit-for-bit the same ones:

@@ -1,7 +1,8 @@
-//! Text in a real font: DejaVu Sans (embedded, `assets/fonts/DejaVuSans.ttf`, Bitstream Vera
-//! licence, `assets/fonts/LICENSE`) rasterised by `ab_glyph`, with anti-aliased coverage. The
-//! comparison report's legends and the viewer's status line use it; the sweep's plots use the
-//! same font through `plotters`. No system font is read, so the pixels are the same everywhere.
+//! Text in a real font (beside the pipeline): DejaVu Sans (embedded, `assets/fonts/DejaVuSans.ttf`,
+//! Bitstream Vera licence, `assets/fonts/LICENSE`) rasterised by `ab_glyph`, with anti-aliased
+//! coverage. The comparison report's legends and the viewer's status line use it; the sweep's plots
+//! use the same font through `plotters`. No system font is read, so the pixels are the same
+//! everywhere.
 
 use ab_glyph::{Font as _, FontRef, PxScale, ScaleFont as _, point};
 use image::RgbaImage;
@@ -69,6 +70,17 @@ pub fn line_height(px: f32) -> f32 {
     scaled.ascent() - scaled.descent()
 }
 
+/// The height in pixels of a capital letter at `px` pixels (the top of "H" above the baseline),
+/// for placing text by the top of its capitals rather than the top of its line.
+pub fn cap_height(px: f32) -> f32 {
+    let font = font();
+    let scaled = font.as_scaled(PxScale::from(px));
+    font.outline(font.glyph_id('H'))
+        .map_or(scaled.ascent(), |o| {
+            o.bounds.max.y.abs() * scaled.v_scale_factor()
+        })
+}
+
 /// Draws `text` into `image` in `colour`, blended by coverage, its top-left at (`x`, `y`).
 /// Clipped to the image.
 pub fn draw(image: &mut RgbaImage, x: f32, y: f32, px: f32, colour: [u8; 3], text: &str) {
@@ -122,5 +134,14 @@ mod tests {
         };
         assert_ne!(draw_one("s"), draw_one("S"));
         assert_ne!(draw_one("5"), draw_one("S"));
+    }
+
+    #[test]
+    fn capitals_are_about_three_quarters_of_the_size() {
+        // DejaVu Sans: capitals 1493 font units high, and a pixel size is ascent − descent,
+        // 1901 + 483 units.
+        let cap = cap_height(20.0);
+        assert!((cap - 20.0 * 1493.0 / 2384.0).abs() < 0.05, "{cap}");
+        assert!(cap < line_height(20.0));
     }
 }

@@ -1,8 +1,8 @@
-//! Opening user input. Every file a user names (a scene, an OBJ or MTL, a surface map, an image
-//! to compare, a sweep's CSV or point PNG) is opened here, after two checks made before it is
-//! opened: it is a regular file (a FIFO would block the open, a device such as `/dev/zero`
-//! never end, a folder is no file), and it is no larger than a stated bound. The read itself
-//! stops at the bound too, so a file that grows meanwhile cannot make it spend more.
+//! Opening user input (beside the pipeline). Every file a user names (a scene, an OBJ or MTL, a
+//! surface map, an image to compare, a sweep's CSV or point PNG) is opened here, after two checks
+//! made before it is opened: it is a regular file (a FIFO would block the open, a device such as
+//! `/dev/zero` never end, a folder is no file), and it is no larger than a stated bound. The read
+//! itself stops at the bound too, so a file that grows meanwhile cannot make it spend more.
 
 use std::fs::File;
 use std::io::Read;

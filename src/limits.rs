@@ -1,5 +1,6 @@
-//! Resource limits: how much memory and work a scene asks for, estimated from the scene alone
-//! (and, for an OBJ mesh, a streaming scan of the file), *before* anything large is allocated.
+//! Resource limits (before the pipeline): how much memory and work a scene asks for, estimated from
+//! the scene alone (and, for an OBJ mesh, a streaming scan of the file), *before* anything large is
+//! allocated.
 //!
 //! A reference renderer is fed machine-generated scenes in bulk; a scene that would need 60 GiB
 //! or a week of baking must be refused in milliseconds with a message that names the limit,

@@ -1,5 +1,5 @@
-//! Writing results: every file is written to a temporary sibling and renamed into place, so an
-//! error or an interrupt never leaves a truncated PNG that looks complete.
+//! Writing results (output stage): every file is written to a temporary sibling and renamed into
+//! place, so an error or an interrupt never leaves a truncated PNG that looks complete.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

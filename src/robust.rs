@@ -1,7 +1,8 @@
-//! Robustness checks shared by the fuzz targets (`fuzz/`, cargo-fuzz, nightly features) and the
-//! property tests (`tests/robustness.rs`, fixed seeds, run by `cargo test`): each function takes
-//! arbitrary input, pushes it through one input path of the pipeline, and panics only when an
-//! invariant breaks. Refusing bad input with an error is the expected outcome, never a failure.
+//! Robustness checks (beside the pipeline) shared by the fuzz targets (`fuzz/`, cargo-fuzz, nightly
+//! features) and the property tests (`tests/robustness.rs`, fixed seeds, run by `cargo test`): each
+//! function takes arbitrary input, pushes it through one input path of the pipeline, and panics
+//! only when an invariant breaks. Refusing bad input with an error is the expected outcome, never a
+//! failure.
 //!
 //! - [`scene_text`]: the scene parser and validator, then the resource estimates.
 //! - [`obj_bytes`]: the OBJ loader (line scan, tobj, merge, box projection), tangent frames,

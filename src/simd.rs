@@ -1,4 +1,5 @@
-//! Wide code paths chosen at run time: the one place where pelage picks an instruction set.
+//! Wide code paths chosen at run time (beside the pipeline): the one place where pelage picks an
+//! instruction set.
 //!
 //! The release build targets plain x86-64 (SSE2), so every 4-lane operation of the rasterizer
 //! and the fragment stage is an SSE2 instruction. A [`Kernel`] — the rasterizer's replay of one

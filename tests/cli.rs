@@ -395,6 +395,36 @@ fn outputs_write_through_devices_links_and_standard_output_and_never_clobber() {
     let o = pelage(&["render", scene, "-o", reference.to_str().expect("path")]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let png = std::fs::read(&reference).expect("reference");
+    // It says what it wrote, on standard output.
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!("{}: 32×24 8-bit PNG at t = 0 s\n", reference.display())
+    );
+    let exr = dir.join("linear.exr");
+    let o = pelage(&["render", scene, "-o", exr.to_str().expect("path")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).ends_with(": 32×24 OpenEXR (32-bit float) at t = 0 s\n")
+    );
+    let frames = dir.join("frames");
+    let o = pelage(&[
+        "render",
+        scene,
+        "--frames",
+        "2",
+        "--fps",
+        "4",
+        "-o",
+        frames.to_str().expect("path"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!(
+            "{}: 2 frames (frame_0000.png to frame_0001.png) at 4 fps\n",
+            frames.display()
+        )
+    );
 
     // `-o -`: the PNG on standard output, no file named `-`.
     let o = Command::new(env!("CARGO_BIN_EXE_pelage"))

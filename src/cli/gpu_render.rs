@@ -70,7 +70,15 @@ pub fn run(scene: &Scene, args: &GpuRequest) -> Result<(), Failure> {
         context.adapter_info().device_type,
         context.adapter_info().backend
     );
-    Ok(())
+    super::say_written(
+        args.output,
+        format_args!(
+            "{}×{} 8-bit PNG at t = {} s (GPU backend)",
+            image.width(),
+            image.height(),
+            scene.time
+        ),
+    )
 }
 
 #[cfg(feature = "gpu")]

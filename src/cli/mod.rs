@@ -322,6 +322,15 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
     pelage::output::write_png(path, width, height, rgba).map_err(|e| Failure::other(e.to_string()))
 }
 
+/// Says on standard output what was written to `path` (`PATH: what`); nothing when the image
+/// itself went to standard output (`-o -`).
+pub fn say_written(path: &Path, what: impl std::fmt::Display) -> Result<(), Failure> {
+    if pelage::output::is_stdout(path) {
+        return Ok(());
+    }
+    say(format!("{}: {what}", path.display()))
+}
+
 /// A progress bar of `len` steps on a terminal; hidden in pipes and CI.
 pub fn progress(len: u64) -> indicatif::ProgressBar {
     if std::io::stderr().is_terminal() {

@@ -126,7 +126,18 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
     for warning in &image.warnings {
         eprintln!("warning: {warning}");
     }
-    Ok(())
+    let kind = match format {
+        ImageFormat::Png8 => "8-bit PNG",
+        ImageFormat::Png16 => "16-bit PNG",
+        ImageFormat::Exr => "OpenEXR (32-bit float)",
+    };
+    super::say_written(
+        &args.output,
+        format_args!(
+            "{}×{} {kind} at t = {} s",
+            image.width, image.height, scene.time
+        ),
+    )
 }
 
 /// Refuses an output path that cannot take a file, before any work: a folder, or a file in a
@@ -272,6 +283,16 @@ fn render_animation(
             .map(|i| (i.width, i.height, i.rgba8))
             .collect();
         pelage::output::write_gif(path, &frames, fps).map_err(|e| Failure::other(e.to_string()))?;
+    }
+    super::say_written(
+        &args.output,
+        format_args!(
+            "{frames} frames (frame_0000.png to frame_{:04}.png) at {fps} fps",
+            frames.saturating_sub(1)
+        ),
+    )?;
+    if let Some(path) = &args.animation {
+        super::say_written(path, format_args!("animated GIF of {frames} frames"))?;
     }
     Ok(())
 }

@@ -1,5 +1,5 @@
-//! Export: everything a GPU implementation needs to draw the same frame as the oracle, written
-//! to one folder by [`export`]:
+//! Export (beside the pipeline: export): everything a GPU implementation needs to draw the same
+//! frame as the oracle, written to one folder by [`export`]:
 //!
 //! ```text
 //! DIR/scene.json                       every parameter and uniform (see below)

@@ -1,6 +1,6 @@
-//! Shell texture baking (thesis 3.1.2.1, 3.1.3): each layer holds the slice of every strand
-//! between two heights, rasterised top-down into the periodic tile at `supersample`× resolution
-//! and box-downsampled.
+//! Shell texture baking (thesis 3.1.2.1, 3.1.3; fur bake): each layer holds the slice of every
+//! strand between two heights, rasterised top-down into the periodic tile at `supersample`×
+//! resolution and box-downsampled.
 //!
 //! Invariant: each layer is built by exactly one rayon task, strands in generation order and each
 //! strand's segments root to tip, a later write overwriting an earlier one (no collision checks,

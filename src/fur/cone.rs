@@ -1,5 +1,5 @@
-//! Cones around strands (thesis 3.1.1, figures 3.3–3.4, 3.7) and the coverage of one projected
-//! cone segment on a bake grid.
+//! Cones around strands (thesis 3.1.1, figures 3.3–3.4, 3.7) and the coverage of one projected cone
+//! segment on a bake grid (fur bake).
 //!
 //! A strand sampled at `strand_resolution` segments becomes a chain of truncated cones, each with
 //! `circle_resolution` flat facets around. The tangent of a facet is the direction of its slanted

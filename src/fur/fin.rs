@@ -1,4 +1,5 @@
-//! Fin texture baking (thesis 3.1.2.2): a side view of taller strands planted in a narrow strip.
+//! Fin texture baking (thesis 3.1.2.2; fur bake): a side view of taller strands planted in a narrow
+//! strip.
 //!
 //! [`bake_fin`] bakes the strip `FurParams` describes; [`bake_fin_for_shells`] (what a scene
 //! draws) fits the strip's strand count and radii to the baked shell layers first, so that a

@@ -1,5 +1,5 @@
 //! 8-bit RGBA images of baked fur, the f32 → u8 quantisation, the tangent encoding, and the
-//! supersampled bake grid with its box downsample (thesis 3.1.3 anti-aliasing).
+//! supersampled bake grid with its box downsample (thesis 3.1.3 anti-aliasing; fur bake).
 //!
 //! Conventions (stable; a GPU backend must match them):
 //! - texels are row-major, row 0 first (`v = 0`), `texels[y · width + x]`;

@@ -1,4 +1,4 @@
-//! Fur modelling (thesis 3.1): strands, cones, and baked shell and fin textures.
+//! Fur modelling (thesis 3.1; fur bake): strands, cones, and baked shell and fin textures.
 //!
 //! The data path: [`FurParams`] → [`generate_strands`] (MT19937 from an explicit seed, one block
 //! of draws per strand) → cones around each sampled Bézier segment → [`bake_shells`] (one

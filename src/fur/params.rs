@@ -1,4 +1,4 @@
-//! Fur modelling parameters (thesis 4.1) and their validation.
+//! Fur modelling parameters (thesis 4.1) and their validation (fur bake).
 //!
 //! Lengths are in *tile units*: the shell texture tile is the periodic unit square
 //! `x, y ∈ [0, 1)`, and heights and radii are measured in the same unit (fractions of the tile

@@ -1,5 +1,5 @@
-//! Strand generation (thesis 3.1.1): cubic Bézier strands planted in the periodic unit tile
-//! with MT19937 (`rand_mt::Mt`, 32-bit) seeded by the caller's seed.
+//! Strand generation (thesis 3.1.1; fur bake): cubic Bézier strands planted in the periodic unit
+//! tile with MT19937 (`rand_mt::Mt`, 32-bit) seeded by the caller's seed.
 //!
 //! Invariant: strand `k` depends only on the seed and the parameters, never on how many strands
 //! follow it. Each strand takes exactly [`DRAWS_PER_STRAND`] consecutive draws from the

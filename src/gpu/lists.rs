@@ -1,5 +1,5 @@
-//! Blending in f32 without a blendable 32-bit target: per-pixel fragment lists, resolved in
-//! draw and primitive order (the GL path; see [`super::Blending`]).
+//! Blending in f32 without a blendable 32-bit target (beside the pipeline: GPU backend): per-pixel
+//! fragment lists, resolved in draw and primitive order (the GL path; see [`super::Blending`]).
 //!
 //! wgpu's GL backend offers no 32-bit float target it can blend (nor render to: see
 //! `target_choice`), and a half-float target rounds the blended colour at every layer. So on

@@ -1,5 +1,6 @@
-//! The GPU backend (feature `gpu`): the same frame as [`PreparedScene::render_at`], drawn by
-//! wgpu from the same baked data, headless (no window, no surface).
+//! The GPU backend (feature `gpu`; beside the pipeline: GPU backend): the same frame as
+//! [`PreparedScene::render_at`], drawn by wgpu from the same baked data, headless (no window, no
+//! surface).
 //!
 //! What is shared with the oracle and what is the GPU's own:
 //! - **Shared data**: the mesh and its tangent frames, the shell and fin textures *with the

@@ -1,6 +1,7 @@
-//! `fur.wgsl` in every GPU language (feature `gpu`): translated by naga, the shader compiler
-//! wgpu itself uses, to GLSL 4.50 core, GLSL ES 3.00, HLSL (shader model 5.1), MSL 2.1 and
-//! SPIR-V 1.0, with the bindings written down beside each ([`translate_all`]).
+//! `fur.wgsl` in every GPU language (feature `gpu`; beside the pipeline: GPU backend): translated
+//! by naga, the shader compiler wgpu itself uses, to GLSL 4.50 core, GLSL ES 3.00, HLSL (shader
+//! model 5.1), MSL 2.1 and SPIR-V 1.0, with the bindings written down beside each
+//! ([`translate_all`]).
 //!
 //! One resource table ([`resources`]) fixes every slot; each language's binding map is built
 //! from it, so `bindings.md` / `bindings.json` and the translated code cannot disagree:

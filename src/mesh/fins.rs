@@ -1,8 +1,8 @@
-//! Fin edges (thesis 3.1.2.2): the unique edges of a mesh, the tests that pick which of them get
-//! a fin, and the chains that give neighbouring fins one continuous texture coordinate.
+//! Fin edges (thesis 3.1.2.2; mesh stage): the unique edges of a mesh, the tests that pick which of
+//! them get a fin, and the chains that give neighbouring fins one continuous texture coordinate.
 //! Invariant: the edge list is sorted and has one entry per pair of distinct *positions*, so a UV
-//! seam never produces two fins on the same spot; every output is in edge order, never in the
-//! order of a hash map.
+//! seam never produces two fins on the same spot; every output is in edge order, never in the order
+//! of a hash map.
 //!
 //! Two selections:
 //! - **outline** (the default): an edge whose two faces disagree on facing the eye (one front,

@@ -1,5 +1,5 @@
-//! Tangent frames: the T, B, N basis that takes world vectors into the fur texture's space
-//! (thesis 3.2.1, eq. 3.1–3.3).
+//! Tangent frames (mesh stage): the T, B, N basis that takes world vectors into the fur texture's
+//! space (thesis 3.2.1, eq. 3.1–3.3).
 //!
 //! How a mesh gets its frames (in [`Mesh::from_parts`], the procedural meshes and the OBJ
 //! loader), in order:

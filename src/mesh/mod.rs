@@ -1,6 +1,6 @@
-//! Meshes: procedural torus, sphere, cylinder and leg, OBJ and glTF loading, skinning and
-//! animation clips, tangent frames (thesis eq. 3.1–3.3), shell extrusion (thesis 3.1.4) and
-//! fin edges (thesis 3.1.2.2).
+//! Meshes (mesh stage): procedural torus, sphere, cylinder and leg, OBJ and glTF loading, skinning
+//! and animation clips, tangent frames (thesis eq. 3.1–3.3), shell extrusion (thesis 3.1.4) and fin
+//! edges (thesis 3.1.2.2).
 //!
 //! Conventions shared by every mesh built here:
 //! - front faces are counter-clockwise seen from outside: `(p1 − p0) × (p2 − p0)` points out;

@@ -1,6 +1,6 @@
-//! OBJ loading through tobj: every model of the file, triangulated and single-indexed, merged in
-//! file order into one [`Mesh`]. The boundary between files and the renderer: every problem in
-//! the file becomes a [`MeshError`] naming the file, or a warning, never a panic.
+//! OBJ loading through tobj (mesh stage): every model of the file, triangulated and single-indexed,
+//! merged in file order into one [`Mesh`]. The boundary between files and the renderer: every
+//! problem in the file becomes a [`MeshError`] naming the file, or a warning, never a panic.
 //!
 //! - **Normals in the file are ignored**: they are recomputed from the faces (thesis 3.1.4,
 //!   3.2.1: "the normal values are recalculated just to make sure the original is correct").

@@ -1,8 +1,8 @@
-//! Procedural meshes: torus (the thesis's main object), UV sphere, open cylinder and a bent
-//! "leg" (thesis fig. 3.11). All are y-up, centred near the origin, CCW seen from outside, with
-//! `u` running around (the longitude, increasing counter-clockwise seen from +y) and `v` along
-//! the other parameter, both over `[0, 1]`. Seam vertices are duplicated (`u = 1` next to
-//! `u = 0`) with bit-identical positions, so their welded normals are identical too.
+//! Procedural meshes (mesh stage): torus (the thesis's main object), UV sphere, open cylinder and a
+//! bent "leg" (thesis fig. 3.11). All are y-up, centred near the origin, CCW seen from outside,
+//! with `u` running around (the longitude, increasing counter-clockwise seen from +y) and `v` along
+//! the other parameter, both over `[0, 1]`. Seam vertices are duplicated (`u = 1` next to `u = 0`)
+//! with bit-identical positions, so their welded normals are identical too.
 //!
 //! `model_resolution` is the **triangle count** (thesis 4.1: "modelResolution is the number of
 //! triangles"; 500 is the base). Segment counts are chosen by the *independent rounding rule*:

@@ -1,6 +1,6 @@
-//! Shell geometry (thesis 3.1.4): each shell layer is the mesh pushed out along its vertex
-//! normals; the invariant is that offsets start at 0 on the surface and never decrease from one
-//! layer to the next.
+//! Shell geometry (thesis 3.1.4; mesh stage): each shell layer is the mesh pushed out along its
+//! vertex normals; the invariant is that offsets start at 0 on the surface and never decrease from
+//! one layer to the next.
 //!
 //! Layer `i` of `N` shells sits at `model_difference · f(i / N)`: layer 0 on the surface, layer
 //! `N − 1` at `model_difference · f((N − 1) / N)`, just below `model_difference`. This matches

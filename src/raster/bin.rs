@@ -1,5 +1,5 @@
-//! Binning: the screen is cut into square tiles and every triangle is listed in each tile its
-//! bounding box touches, in submission order.
+//! Binning (raster stage): the screen is cut into square tiles and every triangle is listed in each
+//! tile its bounding box touches, in submission order.
 //!
 //! Invariant: a tile's list holds triangle indices in increasing order, so rasterizing a tile
 //! replays the draw exactly as submitted. The default tile is 64×64 pixels (llvmpipe's

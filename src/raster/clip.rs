@@ -1,4 +1,4 @@
-//! Clipping in homogeneous clip space, before the perspective divide.
+//! Clipping in homogeneous clip space, before the perspective divide (raster stage).
 //!
 //! Depth follows the wgpu/Vulkan/D3D convention: visible points satisfy `0 ≤ z ≤ w`. A triangle
 //! is clipped against seven planes: `w ≥ W_MIN`, the near plane `z ≥ 0`, the far plane `z ≤ w`,

@@ -1,5 +1,5 @@
-//! The framebuffer: f32 RGBA colour and f32 depth, stored tile by tile so that each tile can be
-//! handed whole to one thread.
+//! The framebuffer (raster stage): f32 RGBA colour and f32 depth, stored tile by tile so that each
+//! tile can be handed whole to one thread.
 //!
 //! Invariant: every pixel belongs to exactly one tile; tiles never share memory. The storage
 //! layout depends on the tile size, the pixel values never do.

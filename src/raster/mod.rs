@@ -1,4 +1,4 @@
-//! The software rasterizer. It knows nothing about fur.
+//! The software rasterizer (raster stage). It knows nothing about fur.
 //!
 //! A [`Frame`] takes draw calls — vertices, triangles, a vertex closure returning clip-space
 //! positions and [`Varyings`], a fragment closure returning a colour or a discard (or a

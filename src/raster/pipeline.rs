@@ -1,5 +1,5 @@
-//! The draw-call API: a caller supplies vertices, triangles, a vertex closure, a fragment
-//! closure and per-draw state; a [`Frame`] collects draws and runs them tile by tile.
+//! The draw-call API (raster stage): a caller supplies vertices, triangles, a vertex closure, a
+//! fragment closure and per-draw state; a [`Frame`] collects draws and runs them tile by tile.
 //!
 //! Setup (vertex stage, clipping, triangle setup, binning) runs when a draw is submitted;
 //! rasterization runs at [`Frame::flush`] or [`Frame::finish`]. Invariant: every tile replays the

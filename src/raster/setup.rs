@@ -1,5 +1,6 @@
-//! Triangle setup: the perspective divide, the viewport transform, snapping to fixed point, and
-//! the three integer edge functions with the top-left fill rule folded into their constants.
+//! Triangle setup (raster stage): the perspective divide, the viewport transform, snapping to fixed
+//! point, and the three integer edge functions with the top-left fill rule folded into their
+//! constants.
 //!
 //! Conventions (the numbers a GPU implementation must match):
 //! - `ndc = clip.xyz · (1/w)`; screen `x = (ndc.x·0.5 + 0.5)·width`,

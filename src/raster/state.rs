@@ -1,6 +1,6 @@
-//! Per-draw fixed-function state: the depth test, depth writes, blending and culling a draw
-//! asks for. Shared by [`super::pipeline`] (which records it with each draw) and [`super::tile`]
-//! (which applies it per fragment); it imports neither.
+//! Per-draw fixed-function state (raster stage): the depth test, depth writes, blending and culling
+//! a draw asks for. Shared by [`super::pipeline`] (which records it with each draw) and
+//! [`super::tile`] (which applies it per fragment); it imports neither.
 //!
 //! Invariant: the state is plain data, copied into each draw; changing it between draws never
 //! affects a draw already submitted.

@@ -1,6 +1,6 @@
-//! Tile rasterization: 2×2 quad traversal, perspective-correct interpolation, the depth test,
-//! the fragment stage (one [`QuadShader`] call per quad) and blending, for one triangle inside
-//! one tile.
+//! Tile rasterization (raster stage): 2×2 quad traversal, perspective-correct interpolation, the
+//! depth test, the fragment stage (one [`QuadShader`] call per quad) and blending, for one triangle
+//! inside one tile.
 //!
 //! Invariant: every pixel of a tile is written by exactly one thread, and a tile's triangles are
 //! processed strictly in submission order, so the result is independent of the thread count and

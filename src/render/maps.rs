@@ -1,5 +1,5 @@
-//! Surface maps (length, density, direction, colour): PNG images in mesh uv space, loaded once
-//! and sampled by the vertex and fragment stages.
+//! Surface maps (length, density, direction, colour; render stage): PNG images in mesh uv space,
+//! loaded once and sampled by the vertex and fragment stages.
 //!
 //! Sampling convention (a GPU port must match it): the map's 8-bit texels `c` read as `c/255`;
 //! texel `(i, j)` has its centre at `u = (i + ½)/width`, `v = (j + ½)/height` (row 0 at

@@ -1,5 +1,5 @@
-//! Assembles one frame: the opaque base mesh, then the shells layer by layer from root to tip,
-//! alpha-blended, then fins at the silhouette (thesis 3.1.2, 3.1.4, 3.2).
+//! Assembles one frame (render stage): the opaque base mesh, then the shells layer by layer from
+//! root to tip, alpha-blended, then fins at the silhouette (thesis 3.1.2, 3.1.4, 3.2).
 //!
 //! [`PreparedScene::new`] does the start-up work the thesis times in chapter 4.1 (build the mesh
 //! and its frames, generate strands, bake shell and fin textures); [`PreparedScene::render`] draws

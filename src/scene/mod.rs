@@ -1,4 +1,4 @@
-//! Scenes: TOML files parsed into a typed, range-checked [`Scene`].
+//! Scenes (scene stage): TOML files parsed into a typed, range-checked [`Scene`].
 //!
 //! Every key has a default (the thesis's base values of chapter 4.1 where it gives one), unknown
 //! keys are errors, and every value is range-checked. Errors name the file, the line and the

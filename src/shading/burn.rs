@@ -1,6 +1,6 @@
-//! Burning fur (thesis 3.4): a match is a spot light fixed to the object; its lobe intensity
-//! decides, per shell, whether the layer is intact, charred, or burnt away, and its exponent
-//! follows a schedule so the burnt area starts small and spreads.
+//! Burning fur (thesis 3.4; shading stage): a match is a spot light fixed to the object; its lobe
+//! intensity decides, per shell, whether the layer is intact, charred, or burnt away, and its
+//! exponent follows a schedule so the burnt area starts small and spreads.
 
 use glam::Vec3;
 

@@ -1,6 +1,6 @@
-//! Kajiya–Kay strand lighting (thesis eq. 2.5 and 2.7, section 3.2.3): diffuse from the sine
-//! between tangent and light, raised to Banks's exponent; specular from the reflection cone,
-//! with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
+//! Kajiya–Kay strand lighting (thesis eq. 2.5 and 2.7, section 3.2.3; shading stage): diffuse from
+//! the sine between tangent and light, raised to Banks's exponent; specular from the reflection
+//! cone, with one tangent or three (Scheuermann's shifted tangents). Every result lies in `[0, 1]`.
 
 use super::lanes::Vec3xN;
 use super::numeric::{finite_or_zero, pow01, pow01_diffuse_specular_dampened_lanes, pow01_lanes};

@@ -1,7 +1,7 @@
-//! Fragments side by side, one array per vector component: the four lanes of a 2×2 quad
-//! ([`Vec3x4`]) or the eight lit lanes of a batch ([`Vec3x8`]). Operations are plain per-lane
-//! loops over the arrays, which LLVM turns into packed instructions as wide as the level's
-//! copy of the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON).
+//! Fragments side by side, one array per vector component (shading stage): the four lanes of a 2×2
+//! quad ([`Vec3x4`]) or the eight lit lanes of a batch ([`Vec3x8`]). Operations are plain per-lane
+//! loops over the arrays, which LLVM turns into packed instructions as wide as the level's copy of
+//! the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON).
 //!
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the

@@ -1,5 +1,5 @@
-//! The lighting combination of thesis 3.2.3: dampened specular and the final colour, eq. 3.7,
-//! with one user weight per term.
+//! The lighting combination of thesis 3.2.3 (shading stage): dampened specular and the final
+//! colour, eq. 3.7, with one user weight per term.
 
 use super::lanes::Vec3xN;
 use super::numeric::{saturate_select, saturate_x4};

@@ -1,5 +1,5 @@
-//! Level of detail: fewer shells as the fur gets smaller on screen, with a continuous
-//! transition.
+//! Level of detail (shading stage): fewer shells as the fur gets smaller on screen, with a
+//! continuous transition.
 //!
 //! How it works:
 //! 1. [`lod_fur_pixels`]: the fur's on-screen height at the object's distance.

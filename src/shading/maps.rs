@@ -1,5 +1,5 @@
-//! Painted fur: the shading-time terms of the length, density, direction and colour maps
-//! (sampled in mesh uv space, see [`crate::render::maps`]).
+//! Painted fur (shading stage): the shading-time terms of the length, density, direction and colour
+//! maps (sampled in mesh uv space, see [`crate::render::maps`]).
 //!
 //! Where each map acts, and why:
 //! - **length**: the vertex stage scales each shell's height by the length at the vertex; the

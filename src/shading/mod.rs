@@ -1,6 +1,6 @@
-//! The shading terms of the thesis (3.2–3.4) as small pure functions: no state, no allocation,
-//! no panics, a finite result for every input. The fragment closures of `render` call them line
-//! for line, in the order of the thesis's shader.
+//! The shading terms of the thesis (3.2–3.4) as small pure functions (shading stage): no state, no
+//! allocation, no panics, a finite result for every input. The fragment closures of `render` call
+//! them line for line, in the order of the thesis's shader.
 //!
 //! # The terms, in the order a fragment uses them
 //! | thesis | function | file |

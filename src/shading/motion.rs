@@ -1,6 +1,6 @@
-//! Bending beyond the thesis's wind: gravity, the damped spring response of the fur to the
-//! object's own motion along a path, and combing, all as one *lean*: a world-space vector whose
-//! part tangent to the surface is the sine of the bend angle.
+//! Bending beyond the thesis's wind (shading stage): gravity, the damped spring response of the fur
+//! to the object's own motion along a path, and combing, all as one *lean*: a world-space vector
+//! whose part tangent to the surface is the sine of the bend angle.
 //!
 //! The lean moves a shell layer like the wind of thesis 3.3 moves it (sideways by the lean times
 //! the layer's height, pulled back along −normal so the strand keeps its length), and the

@@ -1,6 +1,6 @@
-//! Small numeric helpers shared by the shading terms. Their invariant: every helper returns a
-//! finite value for every input, NaN and infinities included, so no shading term can leak a NaN
-//! into the framebuffer.
+//! Small numeric helpers shared by the shading terms (shading stage). Their invariant: every helper
+//! returns a finite value for every input, NaN and infinities included, so no shading term can leak
+//! a NaN into the framebuffer.
 
 use super::lanes::{lane_mask, select_bits};
 use wide::f32x4;

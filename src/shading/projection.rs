@@ -1,6 +1,6 @@
-//! Axis-dropping projection of a world-space change onto texture (u, v) (thesis 3.2.2, reused
-//! for the wind in 3.3): find `(a, b)` with `a·dP/du + b·dP/dv ≈ change` by dropping one world
-//! axis and solving the 2×2 system on the other two (Cramer's rule). Never returns NaN.
+//! Axis-dropping projection of a world-space change onto texture (u, v) (thesis 3.2.2, reused for
+//! the wind in 3.3; shading stage): find `(a, b)` with `a·dP/du + b·dP/dv ≈ change` by dropping one
+//! world axis and solving the 2×2 system on the other two (Cramer's rule). Never returns NaN.
 
 use glam::{Vec2, Vec3};
 

@@ -1,6 +1,6 @@
-//! Shell self-shadow (thesis 3.2.2, after Papaioannou): from a texel, step towards the light
-//! inside the current shell texture, and count how opaque the texels met are. The number of
-//! steps shrinks from root to tip (`m = (N − i)/n`, the "height/n" of table 4.4).
+//! Shell self-shadow (thesis 3.2.2, after Papaioannou; shading stage): from a texel, step towards
+//! the light inside the current shell texture, and count how opaque the texels met are. The number
+//! of steps shrinks from root to tip (`m = (N − i)/n`, the "height/n" of table 4.4).
 
 use super::numeric::{finite_or_zero, saturate, saturate_select, saturate_x4};
 use glam::{Vec2, Vec3};

@@ -1,6 +1,6 @@
-//! Spots and stripes (thesis 3.2.4): a weight in `[0, 1]` per spot, full inside an inner region,
-//! a smooth gradient over an outer ring, zero outside; the spot colour is blended over the fur
-//! colour with that weight, and the result is eq. 3.7's `strandColor`.
+//! Spots and stripes (thesis 3.2.4; shading stage): a weight in `[0, 1]` per spot, full inside an
+//! inner region, a smooth gradient over an outer ring, zero outside; the spot colour is blended
+//! over the fur colour with that weight, and the result is eq. 3.7's `strandColor`.
 //!
 //! Gradient choice: every ring uses the Hermite smoothstep `t²(3 − 2t)` of the linear ring
 //! coordinate `t` (0 at the outer edge, 1 at the inner edge), so the colour has no visible

@@ -1,6 +1,6 @@
-//! Tangent space (thesis 3.2.1): eye and light vectors are taken into the T, B, N basis so that
-//! they meet the strand tangents stored in the shell textures in the same space; and the angle
-//! helpers the Kajiya–Kay terms are built from.
+//! Tangent space (thesis 3.2.1; shading stage): eye and light vectors are taken into the T, B, N
+//! basis so that they meet the strand tangents stored in the shell textures in the same space; and
+//! the angle helpers the Kajiya–Kay terms are built from.
 
 use super::lanes::{Vec3xN, select_bits};
 use crate::mesh::frame::TangentFrame;

@@ -1,5 +1,5 @@
-//! Test-only helpers: a tiny deterministic LCG (no extra crates) and a closeness check against
-//! an f64 reference value.
+//! Test-only helpers (shading stage): a tiny deterministic LCG (no extra crates) and a closeness
+//! check against an f64 reference value.
 
 use glam::Vec3;
 

@@ -1,7 +1,7 @@
-//! Wind (thesis 3.3): a time-varying directional force (a push plus an elastic return, so the
-//! strands sway back and forth, bend limited); the vertex-stage displacement of a shell (along
-//! the wind's surface-tangent part, scaled by the layer, pulled back along −normal so the strand
-//! keeps its length); the fragment-stage reverse lookup offset and the bent tangent.
+//! Wind (thesis 3.3; shading stage): a time-varying directional force (a push plus an elastic
+//! return, so the strands sway back and forth, bend limited); the vertex-stage displacement of a
+//! shell (along the wind's surface-tangent part, scaled by the layer, pulled back along −normal so
+//! the strand keeps its length); the fragment-stage reverse lookup offset and the bent tangent.
 
 use super::lanes::Vec3xN;
 use super::numeric::{finite_or_zero, saturate};

@@ -1,5 +1,6 @@
-//! `results.csv`: one row per sweep point, `point` first, then the parameters in order, then
-//! the measurements. Shards write the same header; merging checks it and orders rows by point.
+//! `results.csv` (beside the pipeline: sweeps): one row per sweep point, `point` first, then the
+//! parameters in order, then the measurements. Shards write the same header; merging checks it and
+//! orders rows by point.
 
 use super::SweepError;
 

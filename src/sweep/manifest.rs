@@ -1,5 +1,5 @@
-//! `sweep.txt`: what sweep a folder's results belong to, so that `sweep-merge` joins only the
-//! shards of one sweep, all of them, each once.
+//! `sweep.txt` (beside the pipeline: sweeps): what sweep a folder's results belong to, so that
+//! `sweep-merge` joins only the shards of one sweep, all of them, each once.
 //!
 //! ```text
 //! pelage sweep

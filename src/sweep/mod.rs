@@ -1,4 +1,5 @@
-//! Parameter sweeps: the thesis's chapter 4 experiments (tables 4.1–4.6) as data.
+//! Parameter sweeps (beside the pipeline: sweeps): the thesis's chapter 4 experiments (tables
+//! 4.1–4.6) as data.
 //!
 //! A sweep is a scene plus one or more `NAME=V1,V2,...` parameters; its points are the
 //! cartesian product of the values, the last parameter varying fastest, numbered from 0 in that

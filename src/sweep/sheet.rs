@@ -1,6 +1,6 @@
-//! The contact sheet: every point's render as a thumbnail in a grid, in point order, its
-//! label (the parameter values that differ between points, and the frame rate) written under it
-//! in the embedded font ([`crate::font`]).
+//! The contact sheet (beside the pipeline: sweeps): every point's render as a thumbnail in a grid,
+//! in point order, its label (the parameter values that differ between points, and the frame rate)
+//! written under it in the embedded font ([`crate::font`]).
 
 use crate::font;
 use image::{RgbaImage, imageops};
