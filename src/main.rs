@@ -70,6 +70,33 @@ const EXIT_BUG: u8 = 101;
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+/// Mesa's Vulkan drivers print `error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment.` twice when a headless run (CI, a container, `ssh` without a login session) has
+/// no runtime folder, although nothing is wrong. Without one, pelage points `XDG_RUNTIME_DIR` at
+/// a private folder of its own (`$TMPDIR/pelage-runtime-UID`, mode 0700), which Mesa accepts; an
+/// existing value is left alone, as is a folder of that name that another user owns or others
+/// can read.
+#[cfg(all(feature = "gpu", unix))]
+fn quiet_runtime_dir() {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    let current = std::env::var_os("XDG_RUNTIME_DIR").map(PathBuf::from);
+    if current.is_some_and(|dir| dir.is_absolute() && dir.is_dir()) {
+        return;
+    }
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("pelage-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let ours = std::fs::symlink_metadata(&dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0);
+    if ours {
+        // SAFETY: called first thing in `main`, before any thread is started (no other thread
+        // can read or write the environment at the same time).
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
 fn main() -> ExitCode {
     // Last line of defence: a panic prints one line, no backtrace, and exits 101. Bad input
     // never gets here; it is answered with its own message and exit status 2.
@@ -87,6 +114,8 @@ fn main() -> ExitCode {
         let message = message.lines().next().unwrap_or("").to_string();
         eprintln!("error: internal error (a bug in pelage, please report it): {message}{location}");
     }));
+    #[cfg(all(feature = "gpu", unix))]
+    quiet_runtime_dir();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return argument_error(e),
