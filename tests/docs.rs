@@ -541,3 +541,17 @@ fn the_whole_frame_example_renders() -> Result<(), Box<dyn std::error::Error>> {
     // end of example
     Ok(())
 }
+
+#[test]
+fn the_shading_term_example_holds() {
+    // example: shading term
+    use pelage::glam::Vec3;
+    use pelage::shading::{BANKS_EXPONENT, kajiya_kay_diffuse};
+
+    // Eq. 2.5 with Banks's exponent: the sine between strand tangent and light, raised to 4.8.
+    let tangent = Vec3::new(0.5, 0.0, 0.866);
+    let diffuse = kajiya_kay_diffuse(tangent, Vec3::Z, BANKS_EXPONENT);
+    let sine = (1.0 - 0.866f32 * 0.866 / tangent.length_squared()).sqrt();
+    assert!((diffuse - sine.powf(4.8)).abs() < 1e-5);
+    // end of example
+}

@@ -54,7 +54,7 @@ struct SetUpChunk<V> {
 /// The flag of a corner index naming a vertex made by clipping ([`SetUpChunk::clipped`]).
 const CLIPPED: u32 = 1 << 31;
 
-/// Most vertices one draw may have: a corner index must leave [`CLIPPED`] free.
+/// Most vertices one draw may have: a corner index must leave `CLIPPED` free.
 pub const MAX_DRAW_VERTICES: usize = CLIPPED as usize;
 
 impl<V> SetUpChunk<V> {

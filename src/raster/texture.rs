@@ -14,7 +14,7 @@
 //!   `lerp(lerp(t00, t10, fx), lerp(t01, t11, fx), fy)` with `lerp(a, b, t) = a + (b − a)·t`.
 //! - `Trilinear` computes the level of detail from the quad's coarse derivatives of (u, v):
 //!   `ρ² = max(‖(∂u/∂x·w, ∂v/∂x·h)‖², ‖(∂u/∂y·w, ∂v/∂y·h)‖²)`, `λ = ½·log2(ρ²)` (pelage's
-//!   own `log2`, the powers' [`crate::shading::numeric::log2_lane`]; no square root)
+//!   own `log2`, the powers' `crate::shading::numeric::log2_lane`; no square root)
 //!   clamped to `[0, levels − 1]` (NaN → 0, +∞ → levels − 1); it samples levels `⌊λ⌋` and
 //!   `⌊λ⌋ + 1` bilinearly and returns `lerp(level0, level1, λ − ⌊λ⌋)`.
 
@@ -27,7 +27,7 @@ use wide::{f32x4, i32x4};
 /// Invariant: `texels.len() == width × height`, both at least 1. Only [`Texture`] builds
 /// levels (its sizes checked), and the fields are private, so the hot reads may rely on it:
 /// an index made of an addressed column (`< width`) and an addressed row (`< height`) is in
-/// bounds ([`MipLevel::texel_at`]).
+/// bounds (`MipLevel::texel_at`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MipLevel {
     width: u32,
@@ -181,7 +181,7 @@ fn unorm8_exact(b: f32) -> f32 {
 /// Two textures with one mip chain shape (a layer's colour and tangent maps), interleaved
 /// once: texel `i` of level `k` holds the first texture's RGBA bytes in 0–3 and the second's in
 /// 4–7, so that a texel read of both is one 8-byte load, widened, converted and turned into
-/// `byte/255` by [`unorm8_exact`] (no division) in 8 lanes at once (docs/performance.md,
+/// `byte/255` by `unorm8_exact` (no division) in 8 lanes at once (docs/performance.md,
 /// "Texel pairs side by side"). Also each level's alpha bytes of the first texture alone, for
 /// the shadow's nearest lookups.
 #[derive(Clone, Debug, PartialEq)]

@@ -43,7 +43,7 @@ pub const ALPHA_DISCARD: f32 = shading::SHADOW_OPAQUE_ALPHA;
 /// What the vertex stage hands the fur fragment stage: what every shaded fragment reads,
 /// then what only lit fragments read, so that the scalar twin interpolates each part only for
 /// the fragments that need it ([`Quad::field`]); the quad stage interpolates a component of a
-/// batch's lanes at a time, when read ([`BatchVaryings`]).
+/// batch's lanes at a time, when read (`BatchVaryings`).
 ///
 /// `repr(C)` of `f32` fields only (bytemuck's `Pod` checks that there is no padding), so that
 /// interpolation can run over all components as one array, and a batch can address a field
@@ -763,7 +763,7 @@ pub const BATCH_LANES: usize = 8;
 /// mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
 /// in one triangle, whose varyings it interpolates a component of all lanes at a time
-/// ([`BatchVaryings`]), and read one pair of mip levels and one shadow level (each keeps its
+/// (`BatchVaryings`), and read one pair of mip levels and one shadow level (each keeps its
 /// own blend fraction); what is rare (the burn, the painted length, density and colour maps,
 /// differently shaped maps, the debug views) runs lane by lane inside the batch with the
 /// scalar terms.

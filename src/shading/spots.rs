@@ -31,7 +31,7 @@ pub fn ellipsoid_spot_intensity(point: Vec3, centre: Vec3, radii: Vec3, inner: f
 
 /// [`ellipsoid_spot_intensity`] of `N` points (the lanes of a fur batch), lane by
 /// lane the same bits: the same divisions, the dot product `(x·x + y·y) + z·z` and its square
-/// root per lane, and [`ramp`]'s branches as selects ([`ramp_lanes`]).
+/// root per lane, and `ramp`'s branches as selects (`ramp_lanes`).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // an indexed loop over several arrays vectorises
 pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
@@ -54,7 +54,7 @@ pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
     ramp_lanes(minus_distance, -1.0, -saturate(inner))
 }
 
-/// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits ([`pow01_lanes`]).
+/// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits (`pow01_lanes`).
 #[inline(always)]
 pub fn light_spot_lobe_lanes<const N: usize>(cosine: [f32; N], exponent: f32) -> [f32; N] {
     pow01_lanes(cosine, [exponent; N])

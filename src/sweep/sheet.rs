@@ -20,7 +20,7 @@ pub fn label_line_height() -> u32 {
 }
 
 /// Where the cells of a contact sheet go: `columns × rows` cells of a thumbnail
-/// `thumbnail_width` wide (the widest render, at most [`THUMBNAIL_WIDTH`]) and at most
+/// `thumbnail_width` wide (the widest render, at most `THUMBNAIL_WIDTH`) and at most
 /// `thumbnail_height` high, a label of `label_lines` under each. Computed from the renders'
 /// sizes alone, so a sheet's memory is known before any render exists.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
