@@ -20,7 +20,11 @@
 //!    a UV seam, vertices with the same position pool their faces only when their own sums
 //!    agree in direction (positive dot for both T and B): a wrap-around seam (torus, sphere,
 //!    `u = 1` next to `u = 0`) gets identical, symmetric derivatives on both sides, while a
-//!    mirrored seam keeps each side's own orientation.
+//!    mirrored seam keeps each side's own orientation. A position shared by more than
+//!    [`MAX_SEAM_GROUP`] vertices is no seam but a degenerate fan (a seam joins a handful of
+//!    copies; a UV sphere's pole one per segment): there each vertex keeps its own sums, so the
+//!    pooling, which compares every pair of a group, costs at most `MAX_SEAM_GROUP` steps a
+//!    vertex.
 //! 5. **Frame** ([`TangentFrame::from_derivatives`]): N = vertex normal; T = `dpdu`
 //!    Gram–Schmidt-orthogonalised against N and normalised; B = N × T, flipped when it points
 //!    against `dpdv` (mirrored UVs). So T, B, N are always orthonormal.
@@ -33,6 +37,10 @@
 use glam::{Mat3, Vec2, Vec3};
 
 use super::{Mesh, Vertex, weld_by_position};
+
+/// The most vertices at one position whose derivatives are pooled across a UV seam (module
+/// docs, step 4); a larger group keeps each vertex's own.
+pub const MAX_SEAM_GROUP: usize = 1024;
 
 /// An orthonormal basis at a surface point: `tangent` follows the texture's u axis, `binormal`
 /// its v axis, `normal` points out of the surface. Tangent-space coordinates of a world vector
@@ -221,6 +229,13 @@ pub(crate) fn build(positions: &[Vec3], uvs: &[Vec2], indices: Vec<[u32; 3]>) ->
     order.sort_by_key(|&i| (weld[i as usize], i));
     let mut pooled = vec![(Vec3::ZERO, Vec3::ZERO, 0.0f32); n];
     for group in order.chunk_by(|&a, &b| weld[a as usize] == weld[b as usize]) {
+        if group.len() > MAX_SEAM_GROUP {
+            for &i in group {
+                let i = i as usize;
+                pooled[i] = (dpdu_sum[i], dpdv_sum[i], weight[i]);
+            }
+            continue;
+        }
         for &i in group {
             let i = i as usize;
             let mut acc = (Vec3::ZERO, Vec3::ZERO, 0.0f32);
@@ -488,6 +503,43 @@ pub(crate) mod tests {
             assert!((v.frame.tangent - expect).length() < 1e-6, "{i}: {v:?}");
             assert!((v.frame.binormal - Vec3::Y).length() < 1e-6);
             assert_eq!(v.frame.is_right_handed(), i < 4);
+        }
+    }
+
+    /// `faces` copies of one triangle, each with its own three vertices, the k-th scaled in u
+    /// by `1 + k` (so every copy has its own ∂p/∂u, all pointing along +x).
+    fn fan(faces: usize) -> Mesh {
+        let mut p = Vec::new();
+        let mut uv = Vec::new();
+        let mut idx = Vec::new();
+        for k in 0..faces {
+            let s = 1.0 + k as f32;
+            p.extend([Vec3::ZERO, Vec3::X, Vec3::Y]);
+            uv.extend([Vec2::ZERO, Vec2::new(s, 0.0), Vec2::Y]);
+            let b = 3 * k as u32;
+            idx.push([b, b + 1, b + 2]);
+        }
+        Mesh::from_parts(&p, &uv, idx).unwrap()
+    }
+
+    #[test]
+    fn a_seam_group_pools_and_a_degenerate_fan_keeps_its_own() {
+        // Up to MAX_SEAM_GROUP copies at one position pool: every copy gets the mean ∂p/∂u.
+        let pooled = fan(MAX_SEAM_GROUP / 2);
+        let first = pooled.vertices[0].dpdu;
+        for v in &pooled.vertices {
+            assert_eq!(v.dpdu, first);
+        }
+        // More, and each keeps its own (1/s along +x), at a cost linear in the group.
+        let faces = MAX_SEAM_GROUP + 1;
+        let fan = fan(faces);
+        for (k, tri) in fan.vertices.chunks(3).enumerate() {
+            let expect = Vec3::X / (1.0 + k as f32);
+            assert!(
+                (tri[0].dpdu - expect).length() < 1e-6,
+                "{k}: {:?}",
+                tri[0].dpdu
+            );
         }
     }
 
