@@ -1,7 +1,7 @@
 //! Text in a real font (beside the pipeline): DejaVu Sans (embedded, `assets/fonts/DejaVuSans.ttf`,
 //! Bitstream Vera licence, `assets/fonts/LICENSE`) rasterised by `ab_glyph`, with anti-aliased
-//! coverage. The comparison report's legends and the viewer's status line use it; the sweep's plots
-//! use the same font through `plotters`. No system font is read, so the pixels are the same
+//! coverage. The comparison report's legends, the strand diagrams and the viewer's status line use
+//! it; the sweep's plots use the same font through `plotters`. No system font is read, so the pixels are the same
 //! everywhere.
 
 use ab_glyph::{Font as _, FontRef, PxScale, ScaleFont as _, point};
@@ -75,10 +75,18 @@ pub fn line_height(px: f32) -> f32 {
 pub fn cap_height(px: f32) -> f32 {
     let font = font();
     let scaled = font.as_scaled(PxScale::from(px));
-    font.outline(font.glyph_id('H'))
-        .map_or(scaled.ascent(), |o| {
-            o.bounds.max.y.abs() * scaled.v_scale_factor()
-        })
+    // The highest point of the outline, in font units (y up); "H" is straight lines only.
+    let top = font.outline(font.glyph_id('H')).map(|o| {
+        o.curves
+            .iter()
+            .flat_map(|c| match *c {
+                ab_glyph::OutlineCurve::Line(a, b) => vec![a.y, b.y],
+                ab_glyph::OutlineCurve::Quad(a, b, c) => vec![a.y, b.y, c.y],
+                ab_glyph::OutlineCurve::Cubic(a, b, c, d) => vec![a.y, b.y, c.y, d.y],
+            })
+            .fold(0.0f32, f32::max)
+    });
+    top.map_or(scaled.ascent(), |t| t * scaled.v_scale_factor())
 }
 
 /// Draws `text` into `image` in `colour`, blended by coverage, its top-left at (`x`, `y`).

@@ -92,7 +92,6 @@ pub mod scene;
 pub mod shading;
 pub mod simd;
 pub mod sweep;
-pub mod text;
 
 // The foreign crates whose types the public API takes or returns, so that callers use the
 // versions pelage was built with (a different glam gives type mismatches).

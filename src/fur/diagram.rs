@@ -5,8 +5,11 @@
 //! colours.
 //!
 //! Every figure is [`DIAGRAM_WIDTH`] × [`DIAGRAM_HEIGHT`] RGBA, opaque, drawn with tiny-skia
-//! (anti-aliased fills and strokes) and labelled with the crate's bitmap font. The bytes depend
-//! only on the figure and the [`DiagramOptions`] (seed and resolutions): the same on every run.
+//! (anti-aliased fills and strokes) and labelled in the embedded DejaVu Sans ([`crate::font`]),
+//! mixed case with the real symbols (`i·H/N`, `×4`, `30°`). Labels are placed by measuring
+//! them ([`font::text_width`]) and kept clear of the drawing and of each other (a test checks
+//! every figure). The bytes depend only on the figure and the [`DiagramOptions`] (seed and
+//! resolutions): the same on every run.
 //!
 //! The strand of every figure is strand 0 of the generator for the options' seed, with the
 //! figure's parameters (listed at [`Figure`]), turned about the vertical so that it leans along
@@ -24,7 +27,7 @@ use super::bake::{ShellLayer, bake_shells, clip_to_slab, cones_of};
 use super::cone::ConeSegment;
 use super::params::{FurError, FurParams};
 use super::strand::{Strand, bezier_point, generate_strands};
-use crate::text;
+use crate::font;
 
 /// Width of every figure, pixels.
 pub const DIAGRAM_WIDTH: u32 = 960;
@@ -98,11 +101,11 @@ impl Figure {
         }
     }
 
-    /// The thesis's caption, shortened where it is long (the bitmap font draws it in capitals).
+    /// The thesis's caption, shortened where it is long.
     pub fn caption(self) -> &'static str {
         match self {
-            Figure::Strand => "A strand produced by a Bezier curve",
-            Figure::Cones => "Encapsulation of a Bezier spline in circular cones",
+            Figure::Strand => "A strand produced by a Bézier curve",
+            Figure::Cones => "Encapsulation of a Bézier spline in circular cones",
             Figure::Thickness => "Thick and thin fur: base and tip thickness",
             Figure::Slope => "A normal sloped and a higher sloped fur",
             Figure::Shells => "A view of the shells from the top and from the side",
@@ -189,10 +192,53 @@ const BANDS: [Rgb; DIAGRAM_SHELLS as usize] = [
 // ---------------------------------------------------------------------------------------------
 // Drawing surface.
 
-/// A tiny-skia pixmap plus the labels drawn over it at the end, with the bitmap font.
+/// Text sizes in pixels ([`crate::font`]'s size: ascent − descent, not the em).
+/// The figure's number and caption.
+const TITLE_PX: f32 = 24.0;
+/// Panel headings, point names, legends.
+const LABEL_PX: f32 = 15.0;
+/// The parameter line under the title, notes, height marks.
+const NOTE_PX: f32 = 14.0;
+
+/// A line of text, drawn over the figure at the end.
+#[derive(Clone, Debug)]
+struct Label {
+    /// Left end of the text.
+    x: f32,
+    /// Top of its capitals (the baseline lies one capital height below).
+    y: f32,
+    text: String,
+    px: f32,
+    rgb: Rgb,
+}
+
+impl Label {
+    /// The pixels the text covers visibly (coverage above 2 %).
+    fn ink(&self) -> Vec<(u32, u32)> {
+        let mut ink = Vec::new();
+        self.rasterise(|x, y, coverage| {
+            if coverage > 0.02 {
+                ink.push((x, y));
+            }
+        });
+        ink
+    }
+
+    /// Calls `plot(x, y, coverage)` for every pixel the text covers.
+    fn rasterise(&self, plot: impl FnMut(u32, u32, f32)) {
+        use ab_glyph::{Font as _, ScaleFont as _};
+        let ascent = font::font()
+            .as_scaled(ab_glyph::PxScale::from(self.px))
+            .ascent();
+        let line_top = self.y + font::cap_height(self.px) - ascent;
+        font::rasterise(&self.text, self.x, line_top, self.px, plot);
+    }
+}
+
+/// A tiny-skia pixmap plus the labels drawn over it at the end.
 struct Canvas {
     pixmap: Pixmap,
-    labels: Vec<(i64, i64, String, u32, Rgb)>,
+    labels: Vec<Label>,
 }
 
 fn paint(rgb: Rgb, alpha: u8, anti_alias: bool) -> Paint<'static> {
@@ -311,80 +357,131 @@ impl Canvas {
         }
     }
 
-    /// A label with its top-left corner at (`x`, `y`), each font pixel `scale` pixels square.
-    fn text(&mut self, x: f32, y: f32, text: &str, scale: u32, rgb: Rgb) {
-        self.labels
-            .push((x as i64, y as i64, text.to_string(), scale.max(1), rgb));
+    /// A line of text `px` high, its left end at `x` and the top of its capitals at `y`;
+    /// returns the x after it.
+    fn text(&mut self, x: f32, y: f32, text: &str, px: f32, rgb: Rgb) -> f32 {
+        if text.is_empty() {
+            return x;
+        }
+        self.labels.push(Label {
+            x,
+            y,
+            text: text.to_string(),
+            px,
+            rgb,
+        });
+        x + font::text_width(text, px)
     }
 
-    /// A colour swatch and its label; returns the x after the label.
+    /// Whether `label` lies inside the figure with its ink, and `pad` pixels around it, over
+    /// background only and clear of every other label's ink.
+    fn is_clear(&self, label: &Label, pad: i64) -> bool {
+        let (w, h) = (self.pixmap.width(), self.pixmap.height());
+        if label.x < 0.0 || label.x + font::text_width(&label.text, label.px) > w as f32 {
+            return false;
+        }
+        let taken: std::collections::HashSet<(u32, u32)> =
+            self.labels.iter().flat_map(Label::ink).collect();
+        let background = Color::from_rgba8(BACKGROUND[0], BACKGROUND[1], BACKGROUND[2], 255)
+            .premultiply()
+            .to_color_u8();
+        label.ink().into_iter().all(|(x, y)| {
+            (-pad..=pad).all(|dy| {
+                (-pad..=pad).all(|dx| {
+                    let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
+                    if nx < 0 || ny < 0 || nx >= i64::from(w) || ny >= i64::from(h) {
+                        return false;
+                    }
+                    let (nx, ny) = (nx as u32, ny as u32);
+                    self.pixmap.pixel(nx, ny) == Some(background) && !taken.contains(&(nx, ny))
+                })
+            })
+        })
+    }
+
+    /// [`Canvas::text`] at the first of `candidates` (top-left corners as for `text`) where its
+    /// ink is two pixels clear of the drawing and of other labels; at the first if none is.
+    fn text_clear(&mut self, candidates: &[Vec2], text: &str, px: f32, rgb: Rgb) {
+        let label = |at: Vec2| Label {
+            x: at.x,
+            y: at.y,
+            text: text.to_string(),
+            px,
+            rgb,
+        };
+        let at = candidates
+            .iter()
+            .copied()
+            .find(|&c| self.is_clear(&label(c), 2))
+            .or(candidates.first().copied())
+            .unwrap_or(Vec2::ZERO);
+        self.text(at.x, at.y, text, px, rgb);
+    }
+
+    /// [`Canvas::text`] ending at `right`.
+    fn text_right(&mut self, right: f32, y: f32, text: &str, px: f32, rgb: Rgb) {
+        self.text(right - font::text_width(text, px), y, text, px, rgb);
+    }
+
+    /// [`Canvas::text`] centred on `centre`.
+    fn text_centred(&mut self, centre: f32, y: f32, text: &str, px: f32, rgb: Rgb) {
+        self.text(centre - 0.5 * font::text_width(text, px), y, text, px, rgb);
+    }
+
+    /// A colour swatch as high as the label's capitals, and the label; returns the x after the
+    /// label and a gap.
     fn swatch(&mut self, x: f32, y: f32, rgb: Rgb, label: &str) -> f32 {
-        self.rect(x, y, 12.0, 9.0, rgb);
+        let h = libm::roundf(font::cap_height(LABEL_PX)) + 1.0;
+        self.rect(x, y - 0.5, 14.0, h, rgb);
         self.stroke(
             &[
-                Vec2::new(x, y),
-                Vec2::new(x + 12.0, y),
-                Vec2::new(x + 12.0, y + 9.0),
-                Vec2::new(x, y + 9.0),
+                Vec2::new(x, y - 0.5),
+                Vec2::new(x + 14.0, y - 0.5),
+                Vec2::new(x + 14.0, y - 0.5 + h),
+                Vec2::new(x, y - 0.5 + h),
             ],
             MUTED,
             1.0,
             false,
             true,
         );
-        self.text(x + 18.0, y + 1.0, label, 1, INK);
-        x + 18.0 + text::text_width(label) as f32 + 18.0
+        self.text(x + 20.0, y, label, LABEL_PX, INK) + 20.0
     }
 
     /// The figure's number and caption, and one line of parameters under it.
     fn title(&mut self, figure: Figure, details: &str) {
-        let title = format!("FIGURE {}  {}", figure.number(), figure.caption());
-        self.text(20.0, 14.0, &title, 2, INK);
-        self.text(20.0, 40.0, details, 1, MUTED);
+        let title = format!("Figure {}   {}", figure.number(), figure.caption());
+        self.text(20.0, 14.0, &title, TITLE_PX, INK);
+        self.text(20.0, 42.0, details, NOTE_PX, MUTED);
     }
 
-    fn finish(self) -> RgbaImage {
+    /// The image without its labels, and the labels.
+    fn drawing(self) -> (RgbaImage, Vec<Label>) {
         let (w, h) = (self.pixmap.width(), self.pixmap.height());
         // Every pixel is opaque (an opaque background under everything), so premultiplied and
         // straight RGBA are the same bytes.
-        let mut image =
+        let image =
             RgbaImage::from_raw(w, h, self.pixmap.take()).expect("a pixmap is w·h RGBA pixels");
-        for (x, y, label, scale, rgb) in &self.labels {
-            draw_text(
-                &mut image,
-                *x,
-                *y,
-                label,
-                *scale,
-                [rgb[0], rgb[1], rgb[2], 255],
-            );
-        }
-        image
+        (image, self.labels)
     }
-}
 
-/// [`text::draw`] with each font pixel drawn `scale` × `scale`.
-fn draw_text(image: &mut RgbaImage, x: i64, y: i64, label: &str, scale: u32, rgba: [u8; 4]) {
-    let s = i64::from(scale);
-    let (width, height) = (i64::from(image.width()), i64::from(image.height()));
-    for (i, c) in label.chars().enumerate() {
-        let left = x + (i * text::ADVANCE) as i64 * s;
-        for (row, bits) in text::glyph(c).iter().enumerate() {
-            for col in 0..text::GLYPH_WIDTH {
-                if bits & (0x10 >> col) == 0 {
-                    continue;
-                }
-                for dy in 0..s {
-                    for dx in 0..s {
-                        let px = left + col as i64 * s + dx;
-                        let py = y + row as i64 * s + dy;
-                        if (0..width).contains(&px) && (0..height).contains(&py) {
-                            image.put_pixel(px as u32, py as u32, image::Rgba(rgba));
-                        }
+    fn finish(self) -> RgbaImage {
+        let (mut image, labels) = self.drawing();
+        let (w, h) = image.dimensions();
+        for label in &labels {
+            label.rasterise(|x, y, coverage| {
+                if x < w && y < h {
+                    let p = image.get_pixel_mut(x, y);
+                    for c in 0..3 {
+                        let (under, over) = (f32::from(p[c]), f32::from(label.rgb[c]));
+                        p[c] = (under + (over - under) * coverage)
+                            .round()
+                            .clamp(0.0, 255.0) as u8;
                     }
                 }
-            }
+            });
         }
+        image
     }
 }
 
@@ -416,7 +513,7 @@ fn panels(count: usize, bottom: f32) -> Vec<Panel> {
 
 impl Panel {
     fn heading(&self, canvas: &mut Canvas, label: &str) {
-        canvas.text(self.x, self.y - 16.0, label, 1, INK);
+        canvas.text(self.x, self.y - 18.0, label, LABEL_PX, INK);
     }
 }
 
@@ -819,7 +916,7 @@ fn strand_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::Strand,
         &format!(
-            "SEED {}: STRAND 0 OF THE GENERATOR. HEIGHT 1, SLOPE 30 DEG, CURL 0.1, JITTER 0.1. SIDE VIEW.",
+            "Seed {}: strand 0 of the generator. Height 1, slope 30°, curl 0.1, jitter 0.1. Side view.",
             options.seed
         ),
     );
@@ -859,57 +956,72 @@ fn strand_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         canvas.disc(view.px(p), 3.0, BACKGROUND, Some(CURVE));
     }
     let names = [
-        "P0 ROOT",
-        "P1 CONTROL NEAR THE MIDDLE",
-        "P2 CONTROL NEAR THE TIP",
-        "P3 TIP",
+        "P0 root",
+        "P1 control near the middle",
+        "P2 control near the tip",
+        "P3 tip",
     ];
-    for ((&p, rgb), name) in control.iter().zip(POINT_COLOURS).zip(names) {
+    for (&p, rgb) in control.iter().zip(POINT_COLOURS) {
         canvas.disc(p, 7.0, rgb, Some(INK));
-        canvas.text(p.x + 13.0, p.y - 4.0, name, 1, INK);
+    }
+    // Each name beside its point, on the first side where it covers nothing drawn.
+    let cap = font::cap_height(LABEL_PX);
+    for (&p, name) in control.iter().zip(names) {
+        let w = font::text_width(name, LABEL_PX);
+        let candidates = [
+            Vec2::new(p.x + 13.0, p.y - 0.5 * cap),
+            Vec2::new(p.x - 13.0 - w, p.y - 0.5 * cap),
+            Vec2::new(p.x + 10.0, p.y + 12.0),
+            Vec2::new(p.x - 10.0 - w, p.y + 12.0),
+            Vec2::new(p.x + 10.0, p.y - 12.0 - cap),
+            Vec2::new(p.x - 10.0 - w, p.y - 12.0 - cap),
+        ];
+        canvas.text_clear(&candidates, name, LABEL_PX, INK);
     }
     marks.roots.push(view.px(strand.root));
 
     // Legend.
-    let (x, mut y) = (610.0, 110.0);
+    let (x, mut y) = (590.0, 110.0);
     let lines = [
-        "A CUBIC BEZIER CURVE FROM ROOT TO TIP:".to_string(),
-        "P1 AT HALF THE HEIGHT, A QUARTER OF THE RUN;".to_string(),
-        "P2 AT 85 % OF THE HEIGHT, THREE QUARTERS OF".to_string(),
-        "THE RUN PLUS THE CURL; EACH POINT JITTERED.".to_string(),
+        "A cubic Bézier curve from root to tip:".to_string(),
+        "P1 at half the height, a quarter of the run;".to_string(),
+        "P2 at 85 % of the height, three quarters of".to_string(),
+        "the run plus the curl; each point jittered.".to_string(),
         String::new(),
         format!(
-            "SMALL DOTS: THE {} SAMPLES (STRAND_RESOLUTION)",
+            "Small dots: the {} samples (strand_resolution)",
             params.strand_resolution
         ),
-        "THAT THE CONES AND THE BAKER USE.".to_string(),
+        "that the cones and the baker use.".to_string(),
     ];
     for l in &lines {
-        canvas.text(x, y, l, 1, INK);
-        y += 14.0;
+        canvas.text(x, y, l, LABEL_PX, INK);
+        y += 20.0;
     }
-    y += 10.0;
+    y += 16.0;
     for (rgb, name) in POINT_COLOURS.iter().zip(names) {
         canvas.swatch(x, y, *rgb, name);
-        y += 18.0;
+        y += 22.0;
     }
+    let mid = y + 0.5 * cap;
     canvas.stroke(
-        &[Vec2::new(x, y + 4.0), Vec2::new(x + 12.0, y + 4.0)],
+        &[Vec2::new(x, mid), Vec2::new(x + 14.0, mid)],
         CURVE,
         4.0,
         false,
         false,
     );
-    canvas.text(x + 18.0, y + 1.0, "THE CURVE", 1, INK);
-    y += 18.0;
+    canvas.text(x + 20.0, y, "the curve", LABEL_PX, INK);
+    y += 22.0;
+    let mid = y + 0.5 * cap;
     canvas.stroke(
-        &[Vec2::new(x, y + 4.0), Vec2::new(x + 12.0, y + 4.0)],
+        &[Vec2::new(x, mid), Vec2::new(x + 14.0, mid)],
         GUIDE,
         1.5,
         true,
         false,
     );
-    canvas.text(x + 18.0, y + 1.0, "CONTROL POLYGON", 1, INK);
+    canvas.text(x + 20.0, y, "control polygon", LABEL_PX, INK);
     Ok(Drawn { canvas, marks })
 }
 
@@ -965,7 +1077,7 @@ fn cones_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::Cones,
         &format!(
-            "SEED {}. {} SEGMENTS ALONG (STRAND_RESOLUTION), {} FACETS AROUND (CIRCLE_RESOLUTION); RADIUS 0.08 AT THE ROOT TO 0.03 AT THE TIP.",
+            "Seed {}. {} segments along (strand_resolution), {} facets around (circle_resolution); radius 0.08 at the root to 0.03 at the tip.",
             options.seed, params.strand_resolution, c
         ),
     );
@@ -976,7 +1088,7 @@ fn cones_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     let left = view.placed(scale, b, ps[0]);
     ps[0].heading(
         &mut canvas,
-        "(A) THE BEZIER AXIS INSIDE ITS CONES (WIREFRAME)",
+        "(a) The Bézier axis inside its cones (wireframe)",
     );
     wireframe(&mut canvas, &left, &chain, c);
     let line: Vec<Vec2> = curve_points(&strand, 200)
@@ -990,7 +1102,7 @@ fn cones_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     let right = view.placed(scale, b, ps[1]);
     ps[1].heading(
         &mut canvas,
-        "(B) THE SAME CONES AS FLAT FACETS (WHAT THE BAKER SLICES)",
+        "(b) The same cones as flat facets (what the baker slices)",
     );
     underlay(&mut canvas, &right, &chain, c);
     paint_faces(
@@ -1005,9 +1117,9 @@ fn cones_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         20.0,
         y,
         WIRE,
-        "RINGS AT THE SEGMENT ENDS, SIDE LINES AT FACET EDGES",
+        "rings at the segment ends, side lines at facet edges",
     );
-    canvas.swatch(x, y, CURVE, "THE BEZIER CURVE AND ITS SAMPLES");
+    canvas.swatch(x, y, CURVE, "the Bézier curve and its samples");
     Ok(Drawn { canvas, marks })
 }
 
@@ -1019,12 +1131,12 @@ fn thickness_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         (
             0.08f32,
             0.03f32,
-            "(A) THICK: RADIUS 0.08 AT THE ROOT, 0.03 AT THE TIP",
+            "(a) Thick: radius 0.08 at the root, 0.03 at the tip",
         ),
         (
             0.025,
             0.008,
-            "(B) THIN: RADIUS 0.025 AT THE ROOT, 0.008 AT THE TIP",
+            "(b) Thin: radius 0.025 at the root, 0.008 at the tip",
         ),
     ];
     let mut chains = Vec::new();
@@ -1044,7 +1156,7 @@ fn thickness_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::Thickness,
         &format!(
-            "SEED {}: THE SAME GENERATOR DRAWS WITH TWO THICKNESSES, ONE SCALE. {} SEGMENTS, {} FACETS.",
+            "Seed {}: the same generator draws with two thicknesses, at one scale. {} segments, {} facets.",
             options.seed, base.strand_resolution, c
         ),
     );
@@ -1076,8 +1188,8 @@ fn slope_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     };
     let c = base.circle_resolution;
     let slopes = [
-        (FurParams::default().slope_deg, "(A) NORMAL SLOPE"),
-        (50.0f32, "(B) HIGHER SLOPE"),
+        (FurParams::default().slope_deg, "(a) Normal slope"),
+        (50.0f32, "(b) Higher slope"),
     ];
     let mut strands = Vec::new();
     let mut chains = Vec::new();
@@ -1095,7 +1207,7 @@ fn slope_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::Slope,
         &format!(
-            "SEED {}: THE SAME GENERATOR DRAWS AT SLOPE {} AND {} DEG (EACH JITTERED BY 10 %). SIDE VIEW, ONE SCALE.",
+            "Seed {}: the same generator draws at slope {}° and {}° (each jittered by 10 %). Side view, one scale.",
             options.seed, slopes[0].0, slopes[1].0
         ),
     );
@@ -1116,7 +1228,7 @@ fn slope_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         let run = tip.x - strand.root.x;
         panel.heading(
             &mut canvas,
-            &format!("{} {} DEG: RUN {:.2}", slopes[k].1, slopes[k].0, run),
+            &format!("{} {}°: run {:.2}", slopes[k].1, slopes[k].0, run),
         );
         canvas.stroke(
             &[
@@ -1165,7 +1277,7 @@ fn slope_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
                 false,
             );
         }
-        canvas.text((x0 + x1) * 0.5 - 9.0, y + 8.0, "RUN", 1, INK);
+        canvas.text_centred((x0 + x1) * 0.5, y + 10.0, "run", LABEL_PX, INK);
         canvas.disc(v.px(strand.root), 5.0, POINT_COLOURS[0], Some(INK));
         canvas.disc(v.px(tip), 5.0, POINT_COLOURS[3], Some(INK));
         marks.roots.push(v.px(strand.root));
@@ -1315,8 +1427,8 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::Shells,
         &format!(
-            "SEED {}. {} SHELLS: LAYER I HOLDS THE STRAND BETWEEN HEIGHTS I*H/{n} AND (I+1)*H/{n}, H = {:.3}. BAKED AT {}X{} TEXELS.",
-            options.seed, n, h, params.texture_resolution, params.texture_resolution
+            "Seed {}. N = {n} shells: layer i holds the strand between heights i·H/N and (i + 1)·H/N, H = {:.3}. Baked at {}×{} texels.",
+            options.seed, h, params.texture_resolution, params.texture_resolution
         ),
     );
     let ps = shells_panels();
@@ -1326,7 +1438,7 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     let b = bounds(chain_points(&chain, c).into_iter().map(|p| view.plane(p)));
     let b = (b.0 - Vec2::new(0.04, 0.02), b.1 + Vec2::new(0.04, 0.02));
     let side = view.placed(View::fit_scale(b, ps[0], 14.0), b, ps[0]);
-    ps[0].heading(&mut canvas, "(A) FROM THE SIDE: THE STRAND SLICED");
+    ps[0].heading(&mut canvas, "(a) From the side: the strand sliced");
     for i in 0..n {
         let (z0, z1) = (h * i as f32 / n as f32, h * (i + 1) as f32 / n as f32);
         let parts = slab(&chain, z0, z1, i + 1 == n);
@@ -1342,14 +1454,15 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         canvas.stroke(&[a, e], GUIDE, 1.0, true, false);
         let label = match i {
             0 => "0".to_string(),
+            1 => format!("H/{n}"),
             i if i == n => "H".to_string(),
-            i => format!("{i}H/{n}"),
+            i => format!("{i}·H/{n}"),
         };
-        canvas.text(
-            ps[0].x + ps[0].w - text::text_width(&label) as f32,
-            a.y - 10.0,
+        canvas.text_right(
+            ps[0].x + ps[0].w,
+            a.y - 4.0 - font::cap_height(NOTE_PX),
             &label,
-            1,
+            NOTE_PX,
             MUTED,
         );
     }
@@ -1358,7 +1471,7 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     // (B) Top view of the baked layers, root first, each covered texel in its layer's colour.
     let layers: Vec<&ShellLayer> = baked.layers.iter().collect();
     let window = TexelWindow::around(&layers, params.texture_resolution, 2, ps[1]);
-    ps[1].heading(&mut canvas, "(B) FROM THE TOP: THE BAKED LAYERS");
+    ps[1].heading(&mut canvas, "(b) From the top: the baked layers");
     window.background(&mut canvas);
     for (i, layer) in baked.layers.iter().enumerate() {
         let rgb = BANDS[i % BANDS.len()];
@@ -1369,12 +1482,13 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     // (C) Side view of the shells as drawn: each layer's texels flat at its shell's height.
     ps[2].heading(
         &mut canvas,
-        "(C) FROM THE SIDE: EACH LAYER FLAT ON ITS SHELL",
+        "(c) From the side: each layer flat on its shell",
     );
     let shell_gap = (ps[2].h - 30.0) / n as f32;
     let base_y = ps[2].y + ps[2].h - 10.0;
     // The columns of (B) above, so that each layer's extent lines up with its texels.
     let left = window.left;
+    let mut shell_labels = Vec::new();
     for (i, layer) in baked.layers.iter().enumerate() {
         let y = base_y - i as f32 * shell_gap;
         let rgb = BANDS[i % BANDS.len()];
@@ -1403,24 +1517,31 @@ fn shells_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
                 rgb,
             );
         }
-        canvas.text(
-            ps[2].x + ps[2].w - 42.0,
-            y - 14.0,
-            &format!("SHELL {}", i + 1),
-            1,
+        shell_labels.push((y, format!("shell {i}")));
+    }
+    // Above each shell's line, at the end its texels leave free.
+    let cap = font::cap_height(NOTE_PX);
+    let right = left + window.w as f32 * window.size;
+    for (y, label) in shell_labels {
+        let w = font::text_width(&label, NOTE_PX);
+        let top = y - 7.0 - cap;
+        canvas.text_clear(
+            &[Vec2::new(right - w, top), Vec2::new(left, top)],
+            &label,
+            NOTE_PX,
             MUTED,
         );
     }
     let mut x = 20.0;
-    let y = DIAGRAM_HEIGHT as f32 - 24.0;
+    let y = DIAGRAM_HEIGHT as f32 - 28.0;
     for (i, rgb) in BANDS.iter().enumerate().take(n as usize) {
-        x = canvas.swatch(x, y, *rgb, &format!("LAYER {}", i + 1));
+        x = canvas.swatch(x, y, *rgb, &format!("layer {i}"));
     }
     canvas.text(
         x,
-        y + 1.0,
-        "(C): THE GAPS A SIDE VIEW SHOWS ARE WHY FINS EXIST",
-        1,
+        y,
+        "(c): the gaps a side view shows are why fins exist",
+        LABEL_PX,
         MUTED,
     );
     Ok(Drawn { canvas, marks })
@@ -1441,6 +1562,9 @@ fn cross_section(cones: &[ConeSegment], z: f32) -> Option<(Vec3, f32)> {
 /// The layer figure 3.7 looks at from the top (0-based: the third).
 const INNER_LAYER: u32 = 2;
 
+/// The top of figure 3.7's legend: below it, the inner colour appears only in its swatch.
+const LEGEND_3_7_TOP: f32 = DIAGRAM_HEIGHT as f32 - 40.0;
+
 /// 3.7: inner (cut) and outer parts of the slices, and the tangents the baker stores.
 fn inner_outer_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     let params = FurParams {
@@ -1460,7 +1584,7 @@ fn inner_outer_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     canvas.title(
         Figure::InnerOuter,
         &format!(
-            "SEED {}. RADIUS 0.12 TO 0.01, {} SHELLS, {} FACETS. SLICING EXPOSES THE INSIDE; THE BAKER GIVES IT THE OUTER FACET'S TANGENT.",
+            "Seed {}. Radius 0.12 to 0.01, {} shells, {} facets. Slicing exposes the inside; the baker gives it the outer facet’s tangent.",
             options.seed, n, c
         ),
     );
@@ -1495,20 +1619,20 @@ fn inner_outer_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
             .map(|p| view.plane(p)),
     );
     let a_view = view.placed(View::fit_scale(b, ps[0], 10.0), b, ps[0]);
-    ps[0].heading(&mut canvas, "(A) THE SLICES, PULLED APART");
+    ps[0].heading(&mut canvas, "(a) The slices, pulled apart");
     for slice in &slices {
         underlay(&mut canvas, &a_view, slice, c);
     }
     paint_faces(&mut canvas, &a_view, &faces, Some((FACET_EDGE, 0.5)));
     if let Some(cut) = slices.get(INNER_LAYER as usize).and_then(|s| s.last()) {
         let p = a_view.px(cut.p1);
-        canvas.text(
+        let label = format!("← layer {INNER_LAYER}");
+        let (x, y) = (
             p.x + cut.r1 * a_view.scale + 10.0,
-            p.y - 4.0,
-            &format!("< LAYER {}", INNER_LAYER + 1),
-            1,
-            INK,
+            p.y - 0.5 * font::cap_height(LABEL_PX),
         );
+        let candidates: Vec<Vec2> = (0..8).map(|k| Vec2::new(x + 8.0 * k as f32, y)).collect();
+        canvas.text_clear(&candidates, &label, LABEL_PX, INK);
     }
     for f in faces.iter().filter(|f| f.rgb == INNER) {
         marks
@@ -1550,9 +1674,9 @@ fn inner_outer_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
     });
     let mean = mean / count.max(1.0);
     let headings = [
-        format!("(B) LAYER {} FROM THE TOP", INNER_LAYER + 1),
-        "(C) ITS STORED TANGENTS".to_string(),
-        "(D) THE SAME, CONTRAST X4".to_string(),
+        format!("(b) Layer {INNER_LAYER} from the top"),
+        "(c) Its stored tangents".to_string(),
+        "(d) The same, contrast ×4".to_string(),
     ];
     for (k, panel) in ps.iter().enumerate().skip(1) {
         let w = TexelWindow {
@@ -1590,21 +1714,21 @@ fn inner_outer_figure(options: &DiagramOptions) -> Result<Drawn, FurError> {
         let outline: Vec<Vec2> = circle.iter().map(|&q| w.point(q)).collect();
         canvas.stroke(&outline, INK, 1.5, true, true);
     }
-    let y = DIAGRAM_HEIGHT as f32 - 30.0;
-    let x = canvas.swatch(20.0, y, INNER, "INNER: THE CUT FACE A SLICE EXPOSES");
-    let x = canvas.swatch(x, y, FUR, "OUTER SURFACE");
+    let y = LEGEND_3_7_TOP + 2.0;
+    let x = canvas.swatch(20.0, y, INNER, "inner: the cut face a slice exposes");
+    let x = canvas.swatch(x, y, FUR, "outer surface");
     canvas.text(
         x,
-        y + 1.0,
-        "DASHED: THE CUT CIRCLE AT THE LAYER'S TOP HEIGHT",
-        1,
+        y,
+        "dashed: the cut circle at the layer’s top height",
+        LABEL_PX,
         MUTED,
     );
     canvas.text(
         20.0,
-        y + 14.0,
-        "(C), (D): INSIDE THE CIRCLE EACH TEXEL CARRIES THE TANGENT OF THE OUTER FACET AT ITS ANGLE (TANGENT MAP: RGB = T*0.5+0.5).",
-        1,
+        y + 19.0,
+        "(c), (d): inside the circle each texel carries the tangent of the outer facet at its angle (tangent map: RGB = t·0.5 + 0.5).",
+        NOTE_PX,
         MUTED,
     );
     Ok(Drawn { canvas, marks })
@@ -1649,6 +1773,79 @@ mod tests {
             let other = draw_diagram(figure, &DiagramOptions::new(99)).expect("draws");
             assert!(a.as_raw() != other.as_raw(), "{}", figure.number());
         }
+    }
+
+    /// Every label of `figure`: inside the figure, its ink (and a pixel around it) over the
+    /// background only, and at least three pixels from every other label's ink.
+    fn check_labels(figure: Figure, seed: u32) {
+        let drawn = render(figure, &DiagramOptions::new(seed)).expect("draws");
+        let (image, labels) = drawn.canvas.drawing();
+        let (w, h) = image.dimensions();
+        let mut owner: Vec<Option<usize>> = vec![None; (w * h) as usize];
+        for (k, label) in labels.iter().enumerate() {
+            let width = font::text_width(&label.text, label.px);
+            assert!(
+                label.x >= 0.0 && label.x + width <= w as f32 && label.y >= 0.0,
+                "figure {} seed {seed}: {:?} leaves the figure",
+                figure.number(),
+                label.text
+            );
+            let ink = label.ink();
+            assert!(!ink.is_empty(), "{:?} draws nothing", label.text);
+            for (x, y) in ink {
+                assert!(x < w && y < h, "{:?} leaves the figure", label.text);
+                for (nx, ny) in [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)]
+                    .map(|(dx, dy)| (x as i64 + dx, y as i64 + dy))
+                    .into_iter()
+                    .filter(|&(nx, ny)| nx >= 0 && ny >= 0 && nx < w as i64 && ny < h as i64)
+                {
+                    let (nx, ny) = (nx as u32, ny as u32);
+                    assert!(
+                        is(&image, nx, ny, BACKGROUND),
+                        "figure {} seed {seed}: {:?} covers the drawing at ({nx}, {ny})",
+                        figure.number(),
+                        label.text
+                    );
+                    let cell = &mut owner[(ny * w + nx) as usize];
+                    if let Some(other) = *cell
+                        && other != k
+                    {
+                        panic!(
+                            "figure {} seed {seed}: {:?} touches {:?} at ({nx}, {ny})",
+                            figure.number(),
+                            label.text,
+                            labels[other].text
+                        );
+                    }
+                    *cell = Some(k);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn labels_are_clear_of_the_drawing_and_of_each_other() {
+        // The documented seed, and two others: the labels that a strand could cover are placed
+        // by measuring, not at fixed spots.
+        for seed in [1234, 7, 99] {
+            for figure in Figure::ALL {
+                check_labels(figure, seed);
+            }
+        }
+    }
+
+    #[test]
+    fn labels_read_in_mixed_case_with_symbols() {
+        let drawn = render(Figure::Shells, &DiagramOptions::new(1234)).expect("draws");
+        let texts: Vec<&str> = drawn
+            .canvas
+            .labels
+            .iter()
+            .map(|l| l.text.as_str())
+            .collect();
+        assert!(texts.iter().any(|t| t.contains("i·H/N")), "{texts:?}");
+        assert!(texts.iter().any(|t| t.contains("64×64")), "{texts:?}");
+        assert!(texts.contains(&"2·H/6"), "{texts:?}");
     }
 
     #[test]
@@ -1795,7 +1992,7 @@ mod tests {
         let regions = drawn.marks.inner_regions.clone();
         let image = drawn.finish();
         // The legend swatch is the one other place the colour may appear.
-        let legend_top = DIAGRAM_HEIGHT - 40;
+        let legend_top = LEGEND_3_7_TOP as u32;
         let mut n = 0;
         for (x, y, p) in image.enumerate_pixels() {
             if [p.0[0], p.0[1], p.0[2]] != INNER || y >= legend_top {
