@@ -110,6 +110,52 @@ mod gpu {
         assert!(lines[0].starts_with("gpu: "), "{lines:?}");
     }
 
+    /// The GPU path is held to the CPU path's refusals, before any work: the output's folder,
+    /// the memory and the work estimates.
+    #[test]
+    fn the_gpu_backend_shares_the_cpu_limits() {
+        let dir = common::scratch("gpu-limits");
+        let huge = dir.join("huge.toml");
+        std::fs::write(
+            &huge,
+            "[fur]\nnumber_of_shells = 256\ntexture_resolution = 2048\n",
+        )
+        .expect("write");
+        let png = dir.join("x.png");
+        let (huge, png) = (huge.to_str().expect("path"), png.to_str().expect("path"));
+        refused(
+            &["render", huge, "--backend", "gpu", "-o", png],
+            "of memory, more than the limit",
+        );
+        refused(
+            &[
+                "render",
+                huge,
+                "--backend",
+                "gpu",
+                "--max-memory",
+                "64G",
+                "--max-work",
+                "1e9",
+                "-o",
+                png,
+            ],
+            "more than the limit of 1.000e9",
+        );
+        assert!(!std::path::Path::new(png).exists());
+        let missing = dir.join("no-such-folder/x.png");
+        refused(
+            &[
+                "render",
+                "--backend",
+                "gpu",
+                "-o",
+                missing.to_str().expect("path"),
+            ],
+            "does not exist",
+        );
+    }
+
     #[test]
     fn adapter_by_index_and_by_name_renders_the_same_frame() {
         let dir = common::scratch("pick");

@@ -163,11 +163,8 @@ impl Bench<'_> {
     /// frames in turn).
     #[cfg(feature = "gpu")]
     fn gpu(&self) -> Result<(Report, Option<Report>), Failure> {
-        use pelage::gpu::{AdapterChoice, GpuContext, GpuError, GpuOptions};
-        let gpu_failure = |e: GpuError| match e {
-            GpuError::NoAdapter(_) => Failure::bad_input(e.to_string()),
-            _ => Failure::other(e.to_string()),
-        };
+        use super::gpu_render::gpu_failure;
+        use pelage::gpu::{AdapterChoice, GpuContext, GpuOptions};
         let context = GpuContext::new(AdapterChoice::default()).map_err(gpu_failure)?;
         let start = Instant::now();
         let frame = context

@@ -31,8 +31,10 @@ pub struct GpuInfoArgs {
     pub api: String,
 }
 
+/// A GPU error as the command's failure: a device that is not there is bad input (exit 2), the
+/// same for every command that draws on the GPU (`render`, `bench`, `sweep`).
 #[cfg(feature = "gpu")]
-fn gpu_failure(e: pelage::gpu::GpuError) -> Failure {
+pub fn gpu_failure(e: pelage::gpu::GpuError) -> Failure {
     use pelage::gpu::GpuError;
     match e {
         // A device that is not there: bad input (exit 2), one line saying what to install

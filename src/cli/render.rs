@@ -82,6 +82,15 @@ pub fn run(args: RenderArgs) -> Result<(), Failure> {
                 args.output.display()
             )));
         }
+        // The same refusals as the CPU path, before any work: the output's folder, and the
+        // memory and work estimates (the GPU holds the same baked textures and mesh, and the
+        // bake runs on the CPU).
+        if args.frames.is_none() {
+            check_output_file(&args.output)?;
+            with_threads(args.common.threads, || {
+                check_limits(&scene, &args.common, 1, false)
+            })??;
+        }
         let request = GpuRequest {
             output: &args.output,
             threads: args.common.threads,

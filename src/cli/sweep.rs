@@ -380,7 +380,7 @@ impl Renderer {
             #[cfg(feature = "gpu")]
             Backend::Gpu => pelage::gpu::GpuContext::new(pelage::gpu::AdapterChoice::default())
                 .map(|c| Renderer::Gpu(Box::new(c)))
-                .map_err(|e| Failure::other(e.to_string())),
+                .map_err(super::gpu_render::gpu_failure),
             #[cfg(not(feature = "gpu"))]
             Backend::Gpu => Err(Failure::bad_input(
                 "--backend gpu: this pelage was built without the `gpu` feature (cargo build --release --features gpu)",
