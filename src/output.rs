@@ -140,6 +140,22 @@ pub enum ImageFormat {
     Exr,
 }
 
+/// Refuses a file name whose extension names another format than the `format` (`"png"`,
+/// `"gif"`) a command writes there, so the bytes are always what the name says. A name without
+/// an extension, and `-` (standard output), are accepted.
+pub fn check_extension(path: &Path, format: &str) -> Result<(), String> {
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+    {
+        Some(e) if e != format => Err(format!(
+            "{}: this is written as a .{format} file; the name says .{e}",
+            path.display()
+        )),
+        _ => Ok(()),
+    }
+}
+
 impl ImageFormat {
     /// The format for `path` at `depth` bits per PNG channel (8 or 16): `.png` (any case),
     /// no extension and `-` are PNG, `.exr` is OpenEXR; any other extension is refused, naming

@@ -689,3 +689,110 @@ fn export_summary_puts_the_count_before_the_list() {
         "{line}"
     );
 }
+
+/// Every output is written as its name says and through links: an output folder named by a
+/// symbolic link (to an earlier export or frame folder) is replaced where the link leads and the
+/// link stays; a GIF, diagram or heat map under another format's extension is refused before
+/// any work.
+#[test]
+fn output_folders_are_written_through_links_and_names_say_the_format() {
+    let dir = scratch("through-links");
+    let scene = write(
+        &dir,
+        "small.toml",
+        "[image]\nwidth = 32\nheight = 24\n[fur]\nnumber_of_strands = 50\nnumber_of_shells = 4\n",
+    );
+    let scene = scene.to_str().expect("path");
+    for (what, args) in [
+        ("export", vec!["export", scene]),
+        ("frames", vec!["render", scene, "--frames", "2"]),
+    ] {
+        let real = dir.join(format!("{what}-real"));
+        let link = dir.join(format!("{what}-link"));
+        let mut first = args.clone();
+        first.extend(["-o", real.to_str().expect("path")]);
+        let o = pelage(&first);
+        assert_eq!(o.status.code(), Some(0), "{what}: {}", stderr(&o));
+        std::os::unix::fs::symlink(&real, &link).expect("symlink");
+        let marker = real.join("scene.json");
+        let before = std::fs::metadata(real.join(if what == "export" {
+            "oracle.png"
+        } else {
+            "frame_0000.png"
+        }))
+        .expect("first output")
+        .modified()
+        .expect("mtime");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let mut again = args.clone();
+        again.extend(["-o", link.to_str().expect("path")]);
+        let o = pelage(&again);
+        assert_eq!(o.status.code(), Some(0), "{what}: {}", stderr(&o));
+        let meta = std::fs::symlink_metadata(&link).expect("link");
+        assert!(
+            meta.file_type().is_symlink(),
+            "{what}: the link was replaced by a folder"
+        );
+        let after = std::fs::metadata(real.join(if what == "export" {
+            "oracle.png"
+        } else {
+            "frame_0000.png"
+        }))
+        .expect("second output")
+        .modified()
+        .expect("mtime");
+        assert!(
+            after > before,
+            "{what}: the folder the link leads to was not rewritten"
+        );
+        assert_eq!(marker.exists(), what == "export");
+    }
+
+    let no_work = |args: &[&str], says: &str| {
+        let o = pelage(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+    };
+    let gif = dir.join("anim.png");
+    let frames = dir.join("never");
+    no_work(
+        &[
+            "render",
+            scene,
+            "--frames",
+            "2",
+            "--animation",
+            gif.to_str().expect("path"),
+            "-o",
+            frames.to_str().expect("path"),
+        ],
+        "the name says .png",
+    );
+    assert!(!gif.exists() && !frames.exists());
+    let jpg = dir.join("d.jpg");
+    no_work(
+        &[
+            "diagram",
+            "--figure",
+            "3.2",
+            "-o",
+            jpg.to_str().expect("path"),
+        ],
+        "written as a .png file",
+    );
+    assert!(!jpg.exists());
+    let png = dir.join("frames-real/frame_0000.png");
+    let png = png.to_str().expect("path");
+    let heat = dir.join("h.jpg");
+    no_work(
+        &[
+            "compare",
+            png,
+            png,
+            "--heatmap",
+            heat.to_str().expect("path"),
+        ],
+        "--heatmap",
+    );
+    assert!(!heat.exists());
+}

@@ -100,6 +100,12 @@ pub fn run(args: CompareArgs) -> Result<(), Failure> {
             out.display()
         )));
     }
+    for (flag, path) in [("--heatmap", &args.heatmap), ("--flip-map", &args.flip_map)] {
+        if let Some(path) = path {
+            pelage::output::check_extension(path, "png")
+                .map_err(|e| Failure::bad_input(format!("{flag} {e}")))?;
+        }
+    }
     check_pair_memory(&args.reference, &args.test, args.max_memory)?;
     let a = load(&args.reference)?;
     let b = load(&args.test)?;

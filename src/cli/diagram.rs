@@ -67,6 +67,8 @@ pub fn run(args: DiagramArgs) -> Result<(), Failure> {
             let path = args
                 .output
                 .unwrap_or_else(|| PathBuf::from(figure.file_name()));
+            pelage::output::check_extension(&path, "png")
+                .map_err(|e| Failure::bad_input(format!("-o {e}")))?;
             draw(figure, &path)
         }
         None => {

@@ -233,6 +233,10 @@ fn render_animation(
         .animation
         .as_deref()
         .filter(|gif| parent_of(gif) == args.output.as_path());
+    if let Some(gif) = &args.animation {
+        pelage::output::check_extension(gif, "gif")
+            .map_err(|e| Failure::bad_input(format!("--animation {e}")))?;
+    }
     if let Some(gif) = &args.animation
         && gif_inside.is_none()
     {

@@ -5,6 +5,8 @@
 //! existing output folder is replaced only when it holds nothing but what this command writes (a
 //! previous run's output); any other existing folder is refused before work starts. On an error
 //! the temporary folder is removed; an interrupted process leaves at most a hidden `.tmp` folder.
+//! An output name that is a symbolic link (to an earlier sweep or export, say) is written
+//! through: the folder it leads to is replaced, beside it, and the link stays a link.
 
 use super::Failure;
 use std::path::{Path, PathBuf};
@@ -20,7 +22,10 @@ pub struct EntryRule {
 /// An output folder being written: files go to [`StagedFolder::path`], renamed to the target at
 /// [`StagedFolder::commit`]; dropped without a commit, it removes itself.
 pub struct StagedFolder {
+    /// The output as the user named it (for messages).
     target: PathBuf,
+    /// The folder actually replaced: `target`, or where a symbolic link named `target` leads.
+    resolved: PathBuf,
     temporary: PathBuf,
     rule: EntryRule,
     committed: bool,
@@ -41,10 +46,16 @@ impl StagedFolder {
                 pelage::output::MAX_FILE_NAME_BYTES
             )));
         }
-        if target.exists() {
+        let resolved = through_links(target).map_err(|e| {
+            Failure::bad_input(format!(
+                "-o {}: a link that cannot be followed ({e})",
+                target.display()
+            ))
+        })?;
+        if resolved.exists() {
             replaceable(target, &rule)?;
         }
-        let parent = parent_of(target);
+        let parent = parent_of(&resolved);
         std::fs::create_dir_all(parent).map_err(|e| {
             other(format!(
                 "cannot create the folder {}: {e}",
@@ -60,6 +71,7 @@ impl StagedFolder {
             .map_err(|e| other(format!("cannot create the temporary folder: {e}")))?;
         Ok(StagedFolder {
             target: target.to_path_buf(),
+            resolved,
             temporary,
             rule,
             committed: false,
@@ -75,12 +87,12 @@ impl StagedFolder {
     pub fn commit(mut self) -> Result<(), Failure> {
         let other = |m: String| Failure::other(format!("{}: {m}", self.target.display()));
         let old = self.temporary.with_extension("old");
-        if self.target.exists() {
+        if self.resolved.exists() {
             replaceable(&self.target, &self.rule)?;
-            std::fs::rename(&self.target, &old)
+            std::fs::rename(&self.resolved, &old)
                 .map_err(|e| other(format!("cannot move the previous output aside: {e}")))?;
         }
-        std::fs::rename(&self.temporary, &self.target)
+        std::fs::rename(&self.temporary, &self.resolved)
             .map_err(|e| other(format!("cannot move the output into place: {e}")))?;
         self.committed = true;
         if old.exists() {
@@ -96,6 +108,23 @@ impl Drop for StagedFolder {
             let _ = std::fs::remove_dir_all(&self.temporary);
         }
     }
+}
+
+/// Where `path` leads through symbolic links (at most 40, as the kernel allows): `path` itself
+/// when it is no link, the link's target (relative targets taken from the link's folder)
+/// otherwise; a dangling link gives the path it would create.
+fn through_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut current = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&current) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&current)?;
+                current = parent_of(&current).join(target);
+            }
+            _ => return Ok(current),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
 }
 
 /// An existing output folder may be replaced only when every entry in it is accepted by `rule`.
