@@ -130,6 +130,30 @@ impl SweepParameter {
     }
 }
 
+/// The scene key (or table) a parameter changes: its [`scene_key`], or for a special name the
+/// key it rewrites (`camera_distance` the eye, `number_of_spots` the spots, `lod` the table).
+fn touched_key(name: &str) -> &str {
+    match name {
+        "camera_distance" => "camera.eye",
+        "number_of_spots" => "spots",
+        "lod" => "lod",
+        _ => scene_key(name),
+    }
+}
+
+/// Whether two parameter names change one scene value: the same key under two names
+/// (`time` and `burn_time`, `model_resolution` and `mesh.model_resolution`), or a table and a key
+/// inside it (`lod` and `lod.min_shells`).
+fn same_key(a: &str, b: &str) -> bool {
+    let (a, b) = (touched_key(a), touched_key(b));
+    let inside = |outer: &str, inner: &str| {
+        inner
+            .strip_prefix(outer)
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with('.') || rest.starts_with('['))
+    };
+    inside(a, b) || inside(b, a)
+}
+
 /// The scene key a parameter name stands for (thesis names are translated, dotted keys kept).
 pub fn scene_key(name: &str) -> &str {
     THESIS_NAMES
@@ -167,10 +191,19 @@ pub fn sweep_points(parameters: &[SweepParameter]) -> Result<Vec<SweepPoint>, Sw
         return Err(SweepError("a sweep needs at least one --param".into()));
     }
     for (i, p) in parameters.iter().enumerate() {
-        if parameters[..i].iter().any(|q| q.name == p.name) {
+        if let Some(q) = parameters[..i].iter().find(|q| q.name == p.name) {
             return Err(SweepError(format!(
                 "--param {} is given twice; list all its values in one --param",
-                p.name
+                q.name
+            )));
+        }
+        if let Some(q) = parameters[..i].iter().find(|q| same_key(&q.name, &p.name)) {
+            return Err(SweepError(format!(
+                "--param {} and --param {} set the same scene value ({}), so one would silently \
+                 win; give one of them",
+                q.name,
+                p.name,
+                touched_key(&p.name)
             )));
         }
     }
@@ -366,6 +399,28 @@ mod tests {
         for bad in ["0/3", "4/3", "1", "a/b", "1/0"] {
             assert!(Shard::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn two_names_for_one_key_are_refused() {
+        for (a, b) in [
+            ("time=1", "burn_time=2"),
+            ("model_resolution=10", "mesh.model_resolution=20"),
+            ("width=10", "image.width=20"),
+            ("camera_distance=5", "camera.eye=[0, 0, 5]"),
+            ("lod=on", "lod.min_shells=4"),
+            ("number_of_spots=1", "spots[0].radius=0.5"),
+        ] {
+            let e = sweep_points(&[param(a), param(b)]).expect_err(b);
+            assert!(e.0.contains("set the same scene value"), "{a} {b}: {e}");
+        }
+        // Neighbours that only share a prefix of letters are different keys.
+        sweep_points(&[
+            param("fur.number_of_shells=4"),
+            param("fur.number_of_shells_x=1"),
+        ])
+        .expect("different keys");
+        sweep_points(&[param("time=1"), param("width=10")]).expect("different keys");
     }
 
     #[test]
