@@ -106,6 +106,22 @@ pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputErro
     let decoded = reader()?
         .decode()
         .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    // A NaN is never a match: rounded to 0 it would pass as black, so an image holding one is
+    // refused rather than compared.
+    let nan = match &decoded {
+        image::DynamicImage::ImageRgba32F(f) => f.as_raw().iter().filter(|c| c.is_nan()).count(),
+        image::DynamicImage::ImageRgb32F(f) => f.as_raw().iter().filter(|c| c.is_nan()).count(),
+        _ => 0,
+    };
+    if nan > 0 {
+        return Err(error(
+            path,
+            format!(
+                "the {what} holds {nan} NaN channel values; a NaN is never a match, so it is \
+                 not compared"
+            ),
+        ));
+    }
     Ok(to_rgba8(decoded))
 }
 

@@ -796,3 +796,58 @@ fn output_folders_are_written_through_links_and_names_say_the_format() {
     );
     assert!(!heat.exists());
 }
+
+/// `compare` never destroys or misreads its inputs: a report folder that holds a compared folder
+/// is refused before anything is written, and a float image holding NaN is refused (a NaN is
+/// never a match; rounded to 0 it would pass as black).
+#[test]
+fn compare_keeps_its_inputs_and_never_matches_nan() {
+    let dir = scratch("compare-inputs");
+    let black = image::RgbaImage::from_pixel(8, 6, image::Rgba([0, 0, 0, 255]));
+    let reference = dir.join("X/images");
+    let capture = dir.join("Y");
+    std::fs::create_dir_all(&reference).expect("dir");
+    std::fs::create_dir_all(&capture).expect("dir");
+    black.save(reference.join("a.png")).expect("png");
+    black.save(capture.join("a.png")).expect("png");
+    let report = dir.join("X");
+    let o = pelage(&[
+        "compare",
+        reference.to_str().expect("path"),
+        capture.to_str().expect("path"),
+        "-o",
+        report.to_str().expect("path"),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("holds the compared folder"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        reference.join("a.png").is_file(),
+        "the reference image is gone"
+    );
+    assert!(!report.join("report.html").exists());
+
+    let nan =
+        image::Rgba32FImage::from_pixel(8, 6, image::Rgba([f32::NAN, f32::NAN, f32::NAN, 1.0]));
+    let exr = dir.join("nan.exr");
+    image::DynamicImage::ImageRgba32F(nan)
+        .save(&exr)
+        .expect("exr");
+    let o = pelage(&[
+        "compare",
+        reference.join("a.png").to_str().expect("path"),
+        exr.to_str().expect("path"),
+        "--tolerance",
+        "exact",
+    ]);
+    assert_ne!(
+        o.status.code(),
+        Some(0),
+        "a NaN capture passed: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(stderr(&o).contains("NaN"), "{}", stderr(&o));
+}

@@ -249,6 +249,19 @@ fn compare_folders(args: &CompareArgs, tolerance: &Tolerance) -> Result<(), Fail
             report.display()
         )));
     }
+    // The report replaces what its folder held: never the images it is about to compare.
+    if let Ok(report_at) = std::fs::canonicalize(report) {
+        for input in [&args.reference, &args.test] {
+            if std::fs::canonicalize(input).is_ok_and(|at| at.starts_with(&report_at)) {
+                return Err(Failure::bad_input(format!(
+                    "-o {}: holds the compared folder {}, whose images the report would \
+                     replace; choose another report folder",
+                    report.display(),
+                    input.display()
+                )));
+            }
+        }
+    }
     std::fs::create_dir_all(report.join("images"))
         .map_err(|e| Failure::other(format!("-o {}: {e}", report.display())))?;
     remove_old_images(&report.join("images"))?;
