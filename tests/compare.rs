@@ -109,7 +109,43 @@ fn two_different_renders_fail_and_the_heat_map_shows_where() {
             "pixel {x},{y}"
         );
     }
-    assert!(dir.join("flip.png").exists());
+    // The FLIP map of this failing pair is readable: where the renders differ its pixels are
+    // bright (FLIP's errors here are mostly 0.01–0.2, which a linear magma scale drew near
+    // black, a mean luma of about 20), and where they are equal it is black.
+    let flip = image::open(dir.join("flip.png"))
+        .expect("FLIP map")
+        .to_rgba8();
+    assert_eq!(flip.height(), 90 + pelage::compare::legend::LEGEND_HEIGHT);
+    let luma = |p: &image::Rgba<u8>| {
+        0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+    };
+    let (mut differing, mut equal) = (Vec::new(), Vec::new());
+    for (x, y, p) in image::imageops::crop_imm(&flip, 0, 0, 120, 90)
+        .to_image()
+        .enumerate_pixels()
+    {
+        if ia.get_pixel(x, y) == ib.get_pixel(x, y) {
+            equal.push(luma(p));
+        } else {
+            differing.push(luma(p));
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    eprintln!(
+        "FLIP map mean luma: differing {:.1}, equal {:.1}",
+        mean(&differing),
+        mean(&equal)
+    );
+    assert!(
+        mean(&differing) > 60.0,
+        "differing: {:.1}",
+        mean(&differing)
+    );
+    assert!(
+        mean(&equal) < 0.5 * mean(&differing),
+        "equal: {:.1}",
+        mean(&equal)
+    );
     // A loose enough tolerance accepts the same pair.
     let o = pelage(&[
         "compare",

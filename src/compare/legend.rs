@@ -1,6 +1,6 @@
-//! Legends for the difference maps: a strip under the map with its colour scale and the values
-//! along it, drawn in the embedded font ([`crate::font`]), so that a heat map read on its own
-//! says what its colours mean.
+//! Legends for the difference maps: a strip under the map with its colour scale, the values
+//! along it and two lines saying what the colours mean, drawn in the embedded font
+//! ([`crate::font`]), so that a map read on its own says what its colours mean.
 
 use image::{Rgba, RgbaImage};
 
@@ -10,12 +10,13 @@ pub enum Legend {
     /// [`super::heat_map`]: the largest channel difference, 1 to 255 steps on a log scale; equal
     /// pixels dim grey.
     Heat,
-    /// [`super::flip_heat_map`]: the FLIP error, 0 to 1, magma colours.
+    /// [`super::flip_heat_map`]: the FLIP error, 0.001 to 1 on a log scale, magma colours; the
+    /// GPU tolerance's per-pixel FLIP bound marked on the scale.
     Flip,
 }
 
 /// Height in pixels of the legend strip.
-pub const LEGEND_HEIGHT: u32 = 56;
+pub const LEGEND_HEIGHT: u32 = 72;
 
 /// Narrowest legend strip, pixels: a narrower map is padded on the right with the background.
 pub const LEGEND_MIN_WIDTH: u32 = 320;
@@ -30,11 +31,36 @@ const TEXT_PX: f32 = 12.0;
 pub fn scale_colour(legend: Legend, s: f32) -> [u8; 4] {
     match legend {
         Legend::Heat => super::ramp(s),
-        Legend::Flip => {
-            let lut = nv_flip::magma_lut().to_vec();
-            let i = (s.clamp(0.0, 1.0) * 255.0).round() as usize * 3;
-            [lut[i], lut[i + 1], lut[i + 2], 255]
-        }
+        Legend::Flip => super::magma(s),
+    }
+}
+
+/// The value `legend` marks on its scale, besides the ticks: (position, value). For FLIP, the
+/// per-pixel bound of the GPU tolerance ([`super::GPU_TOLERANCE`]'s `flip-p99`): colours right
+/// of the mark are errors that at most 1 % of a passing capture's pixels may have.
+pub fn mark(legend: Legend) -> Option<(f32, f32)> {
+    match legend {
+        Legend::Heat => None,
+        Legend::Flip => super::Tolerance::gpu()
+            .max_flip_percentile
+            .map(|(_, bound)| (super::flip_map_position(bound), bound)),
+    }
+}
+
+/// The two lines under `legend`'s scale.
+pub fn captions(legend: Legend) -> [String; 2] {
+    match legend {
+        Legend::Heat => [
+            "largest channel difference, 8-bit steps (log)".to_string(),
+            "grey: equal pixels (the reference, dimmed)".to_string(),
+        ],
+        Legend::Flip => [
+            "FLIP error per pixel (log scale; black = equal)".to_string(),
+            match mark(legend) {
+                Some((_, bound)) => format!("white mark: gpu tolerance, 99 % of pixels ≤ {bound}"),
+                None => String::new(),
+            },
+        ],
     }
 }
 
@@ -45,9 +71,12 @@ pub fn ticks(legend: Legend) -> Vec<(f32, String)> {
             .iter()
             .map(|&d| ((d as f32).ln() / 255f32.ln(), d.to_string()))
             .collect(),
-        Legend::Flip => [0.0f32, 0.25, 0.5, 0.75, 1.0]
+        Legend::Flip => ["0.001", "0.01", "0.1", "1"]
             .iter()
-            .map(|&v| (v, format!("{v}")))
+            .map(|&v| {
+                let e: f32 = v.parse().expect("a number");
+                (super::flip_map_position(e), v.to_string())
+            })
             .collect(),
     }
 }
@@ -60,9 +89,9 @@ pub fn with_legend(map: &RgbaImage, legend: Legend) -> RgbaImage {
     let width = w.max(LEGEND_MIN_WIDTH);
     let mut out = RgbaImage::from_pixel(width, h + LEGEND_HEIGHT, Rgba(BACKGROUND));
     image::imageops::replace(&mut out, map, 0, 0);
-    let (caption, left) = match legend {
-        Legend::Heat => ("largest channel difference, 8-bit steps (log)", 44u32),
-        Legend::Flip => ("FLIP error (0 = equal, 1 = most different)", 8u32),
+    let left = match legend {
+        Legend::Heat => 44u32,
+        Legend::Flip => 8u32,
     };
     let top = h + 4;
     let right = width - 14;
@@ -107,14 +136,27 @@ pub fn with_legend(map: &RgbaImage, legend: Legend) -> RgbaImage {
             &label,
         );
     }
-    crate::font::draw(
-        &mut out,
-        left as f32,
-        (top + bar_height + 19) as f32,
-        TEXT_PX,
-        white,
-        caption,
-    );
+    if let Some((s, _)) = mark(legend) {
+        // A white line across the bar, a little longer than it, two pixels wide.
+        let x = (left as f32 + s * (right - left) as f32).round() as u32;
+        for y in top.saturating_sub(3)..top + bar_height + 3 {
+            for dx in 0..2 {
+                if y >= h {
+                    out.put_pixel(x + dx, y, Rgba([255, 255, 255, 255]));
+                }
+            }
+        }
+    }
+    for (k, caption) in captions(legend).iter().enumerate() {
+        crate::font::draw(
+            &mut out,
+            8.0,
+            (top + bar_height + 19 + 16 * k as u32) as f32,
+            TEXT_PX,
+            white,
+            caption,
+        );
+    }
     out
 }
 
@@ -158,5 +200,35 @@ mod tests {
             let lut = nv_flip::magma_lut().to_vec();
             [lut[0], lut[1], lut[2], 255]
         });
+        // FLIP: decades a third of the scale apart, the GPU bound 0.15 between 0.1 and 1.
+        let flip = ticks(Legend::Flip);
+        let at = |label: &str| flip.iter().find(|t| t.1 == label).map_or(-1.0, |t| t.0);
+        assert_eq!(at("0.001"), 0.0);
+        assert!((at("0.01") - 1.0 / 3.0).abs() < 1e-5, "{}", at("0.01"));
+        assert!((at("0.1") - 2.0 / 3.0).abs() < 1e-5, "{}", at("0.1"));
+        assert_eq!(at("1"), 1.0);
+        let (s, bound) = mark(Legend::Flip).expect("the GPU tolerance bounds FLIP's p99");
+        assert_eq!(bound, 0.15);
+        assert!(s > at("0.1") && s < 0.8, "{s}");
+        assert_eq!(mark(Legend::Heat), None);
+    }
+
+    #[test]
+    fn the_captions_fit_the_narrowest_legend_and_the_mark_is_drawn() {
+        for legend in [Legend::Heat, Legend::Flip] {
+            for caption in captions(legend) {
+                let w = crate::font::text_width(&caption, TEXT_PX);
+                assert!(
+                    8.0 + w <= LEGEND_MIN_WIDTH as f32,
+                    "{caption:?}: {w} pixels"
+                );
+            }
+        }
+        let map = RgbaImage::from_pixel(64, 48, Rgba([0, 0, 0, 255]));
+        let out = with_legend(&map, Legend::Flip);
+        let (s, _) = mark(Legend::Flip).expect("a mark");
+        let right = LEGEND_MIN_WIDTH - 14;
+        let x = (8.0 + s * (right - 8) as f32).round() as u32;
+        assert_eq!(out.get_pixel(x, 48 + 10).0, [255, 255, 255, 255]);
     }
 }

@@ -18,7 +18,8 @@
 //!
 //! A [`Tolerance`] says which figures must stay under which bound; [`Comparison::failures`]
 //! lists every bound exceeded, and an empty list is a pass. [`heat_map`] draws where and how
-//! much two images differ.
+//! much two images differ, [`flip_heat_map`] how much they differ to the eye (FLIP's error on a
+//! log scale, so that the errors of a near miss are bright, not near black).
 
 pub mod legend;
 pub mod report;
@@ -641,14 +642,41 @@ fn ramp(s: f32) -> [u8; 4] {
     [c[0] as u8, c[1] as u8, c[2] as u8, 255]
 }
 
-/// The FLIP error map drawn with FLIP's magma colour map (black = equal), opaque.
+/// The smallest FLIP error [`flip_heat_map`] tells apart from equal: the black end of its
+/// scale (FLIP errors this small are invisible).
+pub const FLIP_MAP_MIN: f32 = 0.001;
+
+/// Where [`flip_heat_map`] puts the FLIP error `e` on its colour scale, in `[0, 1]`: a log
+/// scale, `log10(e / FLIP_MAP_MIN) / log10(1 / FLIP_MAP_MIN)`, so that 0.001 → 0, 0.01 → ⅓,
+/// 0.1 → ⅔ and 1 → 1; errors at or below [`FLIP_MAP_MIN`] (and equal pixels, error 0) → 0.
+///
+/// On a linear scale the errors of a failing GPU capture (mostly 0.01–0.2) drew near black;
+/// here the GPU tolerance's per-pixel bound (`flip-p99=0.15`) sits at 0.73, an orange.
+pub fn flip_map_position(e: f32) -> f32 {
+    if e.is_nan() || e <= FLIP_MAP_MIN {
+        return 0.0;
+    }
+    (libm::log10f(e / FLIP_MAP_MIN) / libm::log10f(1.0 / FLIP_MAP_MIN)).clamp(0.0, 1.0)
+}
+
+/// FLIP's magma colour map (the FLIP paper's, through `nv-flip`) at `s` in `[0, 1]`: black,
+/// purple, red-pink, orange, pale yellow. Perceptually ordered: brighter is larger.
+pub fn magma(s: f32) -> [u8; 4] {
+    static LUT: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    let lut = LUT.get_or_init(|| nv_flip::magma_lut().to_vec());
+    let i = (s.clamp(0.0, 1.0) * 255.0).round() as usize * 3;
+    [lut[i], lut[i + 1], lut[i + 2], 255]
+}
+
+/// The FLIP error map, opaque: each pixel's error placed on the log scale of
+/// [`flip_map_position`] and coloured with [`magma`]; black where the images are equal or
+/// differ by at most [`FLIP_MAP_MIN`].
 pub fn flip_heat_map(a: &RgbaImage, b: &RgbaImage) -> Result<RgbaImage, CompareError> {
     check_sizes(a, b)?;
-    let map = flip_map(a, b).apply_color_lut(&nv_flip::magma_lut());
-    let rgba: Vec<u8> = map
+    let rgba: Vec<u8> = flip_map(a, b)
         .to_vec()
-        .chunks_exact(3)
-        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .into_iter()
+        .flat_map(|e| magma(flip_map_position(e)))
         .collect();
     Ok(RgbaImage::from_raw(a.width(), a.height(), rgba).expect("size matches"))
 }
@@ -659,6 +687,29 @@ mod tests {
 
     fn solid(w: u32, h: u32, c: [u8; 4]) -> RgbaImage {
         RgbaImage::from_pixel(w, h, image::Rgba(c))
+    }
+
+    #[test]
+    fn the_flip_map_scale_is_logarithmic_and_bright_where_a_capture_fails() {
+        assert_eq!(flip_map_position(0.0), 0.0);
+        assert_eq!(flip_map_position(f32::NAN), 0.0);
+        assert_eq!(flip_map_position(FLIP_MAP_MIN), 0.0);
+        for (e, s) in [(0.01f64, 1.0 / 3.0), (0.1, 2.0 / 3.0), (1.0, 1.0)] {
+            let expected = (e / 0.001).log10() / 3.0;
+            assert!((f64::from(flip_map_position(e as f32)) - expected).abs() < 1e-5);
+            assert!((expected - s).abs() < 1e-12);
+        }
+        assert_eq!(flip_map_position(2.0), 1.0);
+        // Brighter is larger, and the GPU tolerance's per-pixel bound is far from black.
+        let luma = |c: [u8; 4]| 0.2126 * c[0] as f32 + 0.7152 * c[1] as f32 + 0.0722 * c[2] as f32;
+        let mut previous = -1.0;
+        for k in 0..=100 {
+            let l = luma(magma(k as f32 / 100.0));
+            assert!(l >= previous, "{k}: {l} < {previous}");
+            previous = l;
+        }
+        assert!(luma(magma(flip_map_position(0.15))) > 100.0);
+        assert_eq!(magma(0.0), magma(flip_map_position(0.0)));
     }
 
     #[test]
