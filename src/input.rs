@@ -93,17 +93,19 @@ pub fn read_text(path: &Path, max_bytes: u64, what: &str) -> Result<String, Inpu
 /// itself may draw ([`crate::raster::framebuffer::check_size`]).
 pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputError> {
     let bytes = read(path, MAX_IMAGE_FILE_BYTES, what)?;
-    let reader = || {
-        image::ImageReader::new(std::io::Cursor::new(&bytes))
+    let reader = |pixels: (u32, u32)| {
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
             .with_guessed_format()
-            .map_err(|e| error(path, format!("cannot read the {what}: {e}")))
+            .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+        reader.limits(decoder_limits(pixels));
+        Ok::<_, InputError>(reader)
     };
-    let (width, height) = reader()?
+    let (width, height) = reader((0, 0))?
         .into_dimensions()
         .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
     crate::raster::framebuffer::check_size(width, height)
         .map_err(|e| error(path, format!("the {what} is {width}×{height}: {e}")))?;
-    let decoded = reader()?
+    let decoded = reader((width, height))?
         .decode()
         .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
     // A NaN is never a match: rounded to 0 it would pass as black, so an image holding one is
@@ -142,14 +144,31 @@ pub fn to_rgba8(image: image::DynamicImage) -> image::RgbaImage {
     }
 }
 
+/// What an image decoder may allocate besides the pixels: the ancillary data it keeps (an ICC
+/// profile, text chunks). A PNG's compressed `iCCP` chunk can inflate a megabyte into a gigabyte;
+/// past this bound the image is refused.
+pub const MAX_DECODER_EXTRA_BYTES: u64 = 16 << 20;
+
+/// Decoder limits for an image of `pixels` (width, height; `(0, 0)` while only the header is
+/// read): its RGBA f32 pixels, the widest any decoder gives, plus [`MAX_DECODER_EXTRA_BYTES`].
+pub fn decoder_limits(pixels: (u32, u32)) -> image::Limits {
+    let mut limits = image::Limits::default();
+    let pixel_bytes = u64::from(pixels.0) * u64::from(pixels.1) * 16;
+    limits.max_alloc = Some(pixel_bytes.saturating_add(MAX_DECODER_EXTRA_BYTES));
+    limits
+}
+
 /// The width and height of an image file, read from its header without decoding it, and the
 /// file's size in bytes; the file is checked as [`read_image`] checks it.
 pub fn image_size(path: &Path, what: &str) -> Result<((u32, u32), u64), InputError> {
     let bytes = check_regular_file(path, MAX_IMAGE_FILE_BYTES, what)?;
     let file = open(path, MAX_IMAGE_FILE_BYTES, what)?;
-    let size = image::ImageReader::new(std::io::BufReader::new(file.take(MAX_IMAGE_FILE_BYTES)))
-        .with_guessed_format()
-        .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?
+    let mut reader =
+        image::ImageReader::new(std::io::BufReader::new(file.take(MAX_IMAGE_FILE_BYTES)))
+            .with_guessed_format()
+            .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
+    reader.limits(decoder_limits((0, 0)));
+    let size = reader
         .into_dimensions()
         .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
     Ok((size, bytes))

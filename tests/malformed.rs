@@ -355,6 +355,35 @@ fn a_render_runs_within_twice_its_memory_estimate_of_address_space() {
         out.status,
         String::from_utf8_lossy(&out.stderr)
     );
+
+    // A 1024² PNG whose 260 KB compressed iCCP chunk inflates to 256 MiB
+    // (tests/malformed/images/iccp-bomb.png): the decoders keep at most
+    // pelage::input::MAX_DECODER_EXTRA_BYTES of ancillary data, so it is compared within the
+    // same budget (it took the whole 256 MiB before).
+    let bomb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed/images/iccp-bomb.png");
+    let files = 2 * std::fs::metadata(&bomb).expect("bomb").len();
+    let estimate = limits::compare_memory((1024, 1024), (1024, 1024), files).total();
+    let limit_kib = 2 * estimate / 1024;
+    assert!(
+        limit_kib < 256 * 1024,
+        "the budget must be smaller than the inflated profile"
+    );
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v {limit_kib} && exec \"$0\" compare \"$1\" \"$1\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_pelage"))
+        .arg(&bomb)
+        .env("RAYON_NUM_THREADS", "2")
+        .output()
+        .expect("bash runs");
+    assert!(
+        out.status.success(),
+        "the iCCP bomb under ulimit -v {limit_kib} KiB: status {:?}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// The limits refuse what is absurd, never a shipped scene: every scene in `scenes/` fits the

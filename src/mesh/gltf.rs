@@ -1265,9 +1265,11 @@ impl Loader<'_> {
             (None, None) => return Err(self.fail(pointer, "has neither uri nor bufferView".into())),
         };
         let reader = || {
-            image::ImageReader::new(std::io::Cursor::new(&bytes))
+            let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
                 .with_guessed_format()
-                .map_err(|e| self.fail(pointer.clone(), format!("cannot read the image: {e}")))
+                .map_err(|e| self.fail(pointer.clone(), format!("cannot read the image: {e}")))?;
+            reader.limits(crate::input::decoder_limits((0, 0)));
+            Ok::<_, GltfError>(reader)
         };
         let format = reader()?.format();
         if !matches!(
@@ -1286,11 +1288,7 @@ impl Loader<'_> {
             ));
         }
         let mut decoder = reader()?;
-        decoder.limits({
-            let mut limits = image::Limits::default();
-            limits.max_alloc = Some(u64::from(MAX_IMAGE_SIDE) * u64::from(MAX_IMAGE_SIDE) * 8);
-            limits
-        });
+        decoder.limits(crate::input::decoder_limits((w, h)));
         let rgba = decoder
             .decode()
             .map_err(|e| self.fail(pointer.clone(), format!("not a readable image: {e}")))?;

@@ -60,12 +60,14 @@ fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
     // A regular file of bounded size (a FIFO or device would hang or never end the read).
     let bytes = crate::input::read(path, crate::input::MAX_IMAGE_FILE_BYTES, "map")
         .map_err(|e| fail(e.message))?;
-    let reader = || {
-        image::ImageReader::new(std::io::Cursor::new(&bytes))
+    let reader = |pixels: (u32, u32)| {
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
             .with_guessed_format()
-            .map_err(|e| fail(format!("cannot read the map: {e}")))
+            .map_err(|e| fail(format!("cannot read the map: {e}")))?;
+        reader.limits(crate::input::decoder_limits(pixels));
+        Ok::<_, MapError>(reader)
     };
-    let checked = reader()?;
+    let checked = reader((0, 0))?;
     if checked.format() != Some(image::ImageFormat::Png) {
         return Err(fail("not a PNG file".into()));
     }
@@ -77,7 +79,7 @@ fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
             "the map is {width}×{height}; each side must be 1..={MAX_MAP_SIDE}"
         )));
     }
-    let image = reader()?
+    let image = reader((width, height))?
         .decode()
         .map_err(|e| fail(format!("not a readable PNG: {e}")))?
         .to_rgba8();
