@@ -77,11 +77,17 @@ impl Manifest {
                     );
                 }
                 "points" => {
-                    points = Some(
-                        value
-                            .parse::<usize>()
-                            .map_err(|_| at(format!("points {value:?} is not a count")))?,
-                    );
+                    let count = value
+                        .parse::<usize>()
+                        .map_err(|_| at(format!("points {value:?} is not a count")))?;
+                    // Used as a loop bound and an allocation size: bounded before use.
+                    if count > super::MAX_POINTS {
+                        return Err(at(format!(
+                            "points {count}: a sweep has at most {} points",
+                            super::MAX_POINTS
+                        )));
+                    }
+                    points = Some(count);
                 }
                 "shard" => {
                     shard = Some(if value == "all" {
@@ -185,6 +191,15 @@ mod tests {
         let err = Manifest::parse("pelage sweep\nid = zz\npoints = 1\nshard = all\n", "x.txt")
             .unwrap_err();
         assert!(err.0.contains("x.txt:2"), "{}", err.0);
+        // Counts are allocation sizes and loop bounds: bounded when read.
+        for text in [
+            "pelage sweep\nid = 1\npoints = 1000000000000000\nshard = all\n",
+            "pelage sweep\nid = 1\npoints = 4\nshard = 1/1000000000000\n",
+            "pelage sweep\nid = 1\npoints = 4\nshard = 1/18446744073709551615\n",
+        ] {
+            let err = Manifest::parse(text, "x.txt").unwrap_err();
+            assert!(err.0.contains("at most"), "{}", err.0);
+        }
     }
 
     #[test]

@@ -236,7 +236,9 @@ pub struct Shard {
 }
 
 impl Shard {
-    /// Parses `I/N` with `1 ≤ I ≤ N`.
+    /// Parses `I/N` with `1 ≤ I ≤ N ≤` [`MAX_POINTS`] (more shards than a sweep may have
+    /// points would only be empty ones; the bound also keeps `N` a safe allocation size when
+    /// `sweep-merge` reads it back from a `sweep.txt`).
     pub fn parse(text: &str) -> Result<Self, SweepError> {
         let bad = || SweepError(format!("--shard {text:?}: expected I/N with 1 <= I <= N"));
         let (i, n) = text.split_once('/').ok_or_else(bad)?;
@@ -244,6 +246,11 @@ impl Shard {
         let count: usize = n.trim().parse().map_err(|_| bad())?;
         if index == 0 || index > count {
             return Err(bad());
+        }
+        if count > MAX_POINTS {
+            return Err(SweepError(format!(
+                "--shard {text:?}: at most {MAX_POINTS} shards (a sweep has at most as many points)"
+            )));
         }
         Ok(Shard { index, count })
     }
@@ -396,7 +403,15 @@ mod tests {
         for point in 0..20 {
             assert_eq!(shards.iter().filter(|s| s.runs(point)).count(), 1);
         }
-        for bad in ["0/3", "4/3", "1", "a/b", "1/0"] {
+        for bad in [
+            "0/3",
+            "4/3",
+            "1",
+            "a/b",
+            "1/0",
+            "1/18446744073709551615",
+            "1/100001",
+        ] {
             assert!(Shard::parse(bad).is_err(), "{bad}");
         }
     }
