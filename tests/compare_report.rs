@@ -126,6 +126,9 @@ fn folders_are_compared_pair_by_pair_worst_first() {
     );
     let html = std::fs::read_to_string(out.join("report.html")).expect("html");
     assert_eq!(html.matches("<tr class=\"row ").count(), 4);
+    // The images scale to the page (the browser check below measures it at 1400 pixels).
+    assert!(html.contains("img{display:block;max-width:100%;height:auto}"));
+    assert!(html.contains("div.images{display:flex;flex-wrap:wrap;"));
     assert!(html.find("data-name=\"shifted\"") < html.find("data-name=\"same\""));
 
     // A tolerance that forgives the one pixel but not the block; without the reference that
@@ -264,25 +267,38 @@ fn the_report_page_loads_in_headless_chromium_with_its_rows_and_images() {
     };
     let dir = scratch("chromium");
     let (r, c) = folders(&dir, true);
+    // A pair too wide to sit three abreast in a 1400-pixel window.
+    let wide = card(900, 600);
+    wide.save(r.join("wide.png")).expect("w");
+    wide.save(c.join("wide.png")).expect("w");
     let out = dir.join("report");
     compare_folders(&r, &c, &out, &[]);
     let page = format!("file://{}", path(&out.join("report.html")));
     let o = headless(&browser, &dir.join("profile-dom"))
+        .arg("--window-size=1400,900")
         .arg("--dump-dom")
         .arg(&page)
         .output()
         .expect("chromium runs");
     let dom = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // The page's script ran after every image was fetched: 4 compared pairs × 3 images, all
+    // The page's script ran after every image was fetched: 5 compared pairs × 3 images, all
     // decoded by the browser (the EXR capture's copy is a PNG it can show).
-    assert!(dom.contains("data-images-loaded=\"12/12\""), "{dom}");
+    assert!(dom.contains("data-images-loaded=\"15/15\""), "{dom}");
+    // At 1400 pixels nothing runs off the right edge; the small pairs' images sit side by
+    // side, the wide pair's under each other.
+    assert!(dom.contains("data-overflow=\"0\""), "{dom}");
+    assert!(dom.contains("data-side-by-side=\"4/5\""), "{dom}");
     let rows: Vec<&str> = dom
         .split("<tr class=\"row ")
         .skip(1)
         .map(|s| s.split('"').next().unwrap_or(""))
         .collect();
-    assert_eq!(rows, ["error", "fail", "fail", "pass", "pass"], "{dom}");
+    assert_eq!(
+        rows,
+        ["error", "fail", "fail", "pass", "pass", "pass"],
+        "{dom}"
+    );
     assert!(dom.contains("only-ref.png") && dom.contains("only-cap.png"));
     let shot = dir.join("shot.png");
     let o = headless(&browser, &dir.join("profile-shot"))

@@ -3,10 +3,25 @@
 //! written as JSON and as an HTML page (reference | heat map | capture, the figures, the
 //! verdict; missing and extra files listed). The files are read and written by the caller
 //! (`pelage compare REF_DIR TEST_DIR -o REPORT_DIR`); this module only decides and formats.
+//!
+//! The page fits its window: the table is the page's width, a row's three images sit side by
+//! side when each fits at three quarters of its size or more and wrap under each other when
+//! they do not, and an image wider than its place is scaled down (`max-width: 100%`, the
+//! height following). Images narrower than
+//! [`MIN_SHOWN_WIDTH`] are zoomed by a whole factor, pixelated, so that their pixels stay sharp.
 
 use super::{Comparison, Tolerance};
 use serde::Serialize;
 use std::collections::BTreeMap;
+
+/// Narrowest a reference or capture is shown, CSS pixels: a narrower one is zoomed by the whole
+/// factor that brings it closest to this, at most ×4 ([`zoom`]).
+pub const MIN_SHOWN_WIDTH: u32 = 200;
+
+/// The whole factor an image `width` pixels wide is zoomed by on the report page.
+pub fn zoom(width: u32) -> u32 {
+    (MIN_SHOWN_WIDTH / width.max(1)).clamp(1, 4)
+}
 
 /// File extensions read as images (lower case).
 pub const IMAGE_EXTENSIONS: [&str; 7] = ["png", "exr", "jpg", "jpeg", "bmp", "gif", "webp"];
@@ -197,14 +212,23 @@ impl Report {
             "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n",
             "<title>pelage compare report</title>\n<style>\n",
             "body{font-family:sans-serif;margin:1.5em;background:#fafafa;color:#222}\n",
-            "table{border-collapse:collapse}\n",
+            "code{overflow-wrap:anywhere}\n",
+            "table{border-collapse:collapse;width:100%}\n",
             "td,th{border:1px solid #ccc;padding:6px;vertical-align:top;text-align:left}\n",
             "th{background:#eee}\n",
-            "img{max-width:320px;image-rendering:pixelated;display:block}\n",
+            "td.name{overflow-wrap:anywhere;min-width:7em}\n",
+            "td.images{width:100%}\n",
+            "div.images{display:flex;flex-wrap:wrap;gap:8px 12px;align-items:flex-start}\n",
+            "figure{margin:0;min-width:0;max-width:100%}\n",
+            "figure img{width:100%}\n",
+            "figcaption{font-size:small;color:#555;margin-top:2px}\n",
+            "img{display:block;max-width:100%;height:auto}\n",
+            "img.zoomed{image-rendering:pixelated}\n",
             "tr.fail td.verdict{background:#f8d0d0;font-weight:bold}\n",
             "tr.error td.verdict{background:#f0b0f0;font-weight:bold}\n",
             "tr.pass td.verdict{background:#d0f0d0}\n",
-            "td.figures{font-family:monospace;white-space:pre}\n",
+            "td.figures{font-family:monospace;white-space:pre-wrap;overflow-wrap:anywhere}\n",
+            "td.figures div{width:17em}\n",
             "</style>\n</head>\n<body>\n<h1>pelage compare report</h1>\n"
         ));
         h.push_str(&format!(
@@ -244,7 +268,7 @@ impl Report {
         }
         h.push_str(concat!(
             "<table id=\"pairs\">\n<tr><th>#</th><th>image</th><th>verdict</th>",
-            "<th>reference</th><th>heat map</th><th>capture</th><th>figures</th></tr>\n"
+            "<th>reference | heat map | capture</th><th>figures</th></tr>\n"
         ));
         for (i, row) in self.rows.iter().enumerate() {
             let class = match row.verdict {
@@ -253,7 +277,7 @@ impl Report {
                 Verdict::Error => "error",
             };
             h.push_str(&format!(
-                "<tr class=\"row {class}\" data-name=\"{}\"><td>{}</td><td>{}<br><small>{} | {}</small></td><td class=\"verdict\">{}</td>",
+                "<tr class=\"row {class}\" data-name=\"{}\"><td>{}</td><td class=\"name\">{}<br><small>{} | {}</small></td><td class=\"verdict\">{}</td>",
                 escape(&row.name),
                 i + 1,
                 escape(&row.name),
@@ -263,26 +287,52 @@ impl Report {
             ));
             match (&row.images, &row.comparison) {
                 (Some([r, heat, c, flip]), Some(cmp)) => {
-                    for (src, alt) in [(r, "reference"), (heat, "heat map"), (c, "capture")] {
+                    let (w, hh) = (cmp.width, cmp.height);
+                    let z = zoom(w);
+                    let zoomed = if z > 1 {
+                        format!(" (×{z})")
+                    } else {
+                        String::new()
+                    };
+                    // The heat map carries its legend: at least LEGEND_MIN_WIDTH wide, taller
+                    // by LEGEND_HEIGHT; shown at its own size, so its legend reads as drawn.
+                    let heat_size = (
+                        w.max(super::legend::LEGEND_MIN_WIDTH),
+                        hh + super::legend::LEGEND_HEIGHT,
+                    );
+                    h.push_str("<td class=\"images\"><div class=\"images\">");
+                    for (src, alt, (fw, fh), fz, caption) in [
+                        (r, "reference", (w, hh), z, format!("reference{zoomed}")),
+                        (
+                            heat,
+                            "heat map",
+                            heat_size,
+                            1,
+                            format!("heat map · <a href=\"{}\">FLIP map</a>", escape(flip)),
+                        ),
+                        (c, "capture", (w, hh), z, format!("capture{zoomed}")),
+                    ] {
+                        // Shown at most at its (zoomed) size; side by side with the others while
+                        // each keeps three quarters of it, else on a line of its own.
+                        let (sw, sh) = (fw * fz, fh * fz);
                         h.push_str(&format!(
-                            "<td><a href=\"{0}\"><img src=\"{0}\" alt=\"{1} of {2}\"></a>{3}</td>",
+                            "<figure style=\"flex:1 1 {basis}px;max-width:{sw}px\"><a href=\"{0}\"><img src=\"{0}\" alt=\"{1} of {2}\" width=\"{sw}\" height=\"{sh}\"{3}></a><figcaption>{4}</figcaption></figure>",
                             escape(src),
                             alt,
                             escape(&row.name),
-                            if alt == "heat map" {
-                                format!("<a href=\"{}\">FLIP map</a>", escape(flip))
-                            } else {
-                                String::new()
-                            }
+                            if fz > 1 { " class=\"zoomed\"" } else { "" },
+                            caption,
+                            basis = sw * 3 / 4,
                         ));
                     }
+                    h.push_str("</div></td>");
                     h.push_str(&format!(
-                        "<td class=\"figures\">{}</td>",
+                        "<td class=\"figures\"><div>{}</div></td>",
                         escape(&figures(cmp))
                     ));
                 }
                 _ => h.push_str(&format!(
-                    "<td colspan=\"4\">{}</td>",
+                    "<td colspan=\"2\">{}</td>",
                     escape(row.error.as_deref().unwrap_or("not compared"))
                 )),
             }
@@ -297,6 +347,13 @@ impl Report {
             "  const ok = images.filter(i => i.complete && i.naturalWidth > 0).length;\n",
             "  document.body.dataset.imagesLoaded = ok + '/' + images.length;\n",
             "  document.getElementById('loaded').textContent = ok + ' of ' + images.length + ' images loaded';\n",
+            "  // How far the page runs past the window's right edge (0: it fits), and how many rows\n",
+            "  // show their images side by side on one line.\n",
+            "  const root = document.documentElement;\n",
+            "  document.body.dataset.overflow = Math.max(0, root.scrollWidth - root.clientWidth);\n",
+            "  const rows = Array.from(document.querySelectorAll('div.images'));\n",
+            "  const oneLine = rows.filter(d => new Set(Array.from(d.children, f => f.offsetTop)).size === 1);\n",
+            "  document.body.dataset.sideBySide = oneLine.length + '/' + rows.length;\n",
             "});\n</script>\n</body>\n</html>\n"
         ));
         h
@@ -367,6 +424,16 @@ mod tests {
         assert_eq!(p.extra, names(&["d.JPG"]));
         let e = pair_names(&names(&["a.png", "a.exr"]), &[]).unwrap_err();
         assert!(e.contains("a.png") && e.contains("a.exr"), "{e}");
+    }
+
+    #[test]
+    fn small_images_are_zoomed_by_a_whole_factor() {
+        assert_eq!(zoom(96), 2);
+        assert_eq!(zoom(64), 3);
+        assert_eq!(zoom(10), 4);
+        assert_eq!(zoom(0), 4);
+        assert_eq!(zoom(200), 1);
+        assert_eq!(zoom(1366), 1);
     }
 
     #[test]
