@@ -1,6 +1,6 @@
-//! Legends for the difference maps: a strip under the map with its colour scale, the values
-//! along it and two lines saying what the colours mean, drawn in the embedded font
-//! ([`crate::font`]), so that a map read on its own says what its colours mean.
+//! Legends for the difference maps (beside the pipeline: comparison): a strip under the map with
+//! its colour scale, the values along it and two lines saying what the colours mean, drawn in the
+//! embedded font ([`crate::font`]), so that a map read on its own says what its colours mean.
 
 use image::{Rgba, RgbaImage};
 

@@ -1,4 +1,5 @@
-//! Comparing two renders: the oracle's and a GPU's (or any two RGBA8 images of one size).
+//! Comparing two renders (beside the pipeline: comparison): the oracle's and a GPU's (or any two
+//! RGBA8 images of one size).
 //!
 //! [`compare_images`] measures, in this order of strictness (the tiers of the Khronos
 //! conformance suite's `tcuImageCompare` and of wgpu's image tests):

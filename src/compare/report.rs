@@ -1,8 +1,8 @@
-//! Comparing a folder of references with a folder of captures: images paired by name
-//! ([`pair_names`]), one [`Row`] per pair with its [`Comparison`], worst first, and the report
-//! written as JSON and as an HTML page (reference | heat map | capture, the figures, the
-//! verdict; missing and extra files listed). The files are read and written by the caller
-//! (`pelage compare REF_DIR TEST_DIR -o REPORT_DIR`); this module only decides and formats.
+//! Comparing a folder of references with a folder of captures (beside the pipeline: comparison):
+//! images paired by name ([`pair_names`]), one [`Row`] per pair with its [`Comparison`], worst
+//! first, and the report written as JSON and as an HTML page (reference | heat map | capture, the
+//! figures, the verdict; missing and extra files listed). The files are read and written by the
+//! caller (`pelage compare REF_DIR TEST_DIR -o REPORT_DIR`); this module only decides and formats.
 //!
 //! The page fits its window: the table is the page's width, a row's three images sit side by
 //! side when each fits at three quarters of its size or more and wrap under each other when
