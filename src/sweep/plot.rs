@@ -1,10 +1,14 @@
-//! The plots of a sweep, drawn with `plotters` (bitmap backend; text in the embedded DejaVu Sans
-//! through `ab_glyph`, no system font): frames per second, median frame time and fragments
-//! shaded, each against the first parameter that varies, one line per combination of the
-//! other parameters, with a title, axis labels with units, ticks and a legend under the plot.
+//! The plots of a sweep, drawn with `plotters` (bitmap backend) and their text with
+//! [`crate::font`] (the embedded DejaVu Sans, no system font): frames per second, median frame
+//! time and fragments shaded, each against the first parameter that varies, one line per
+//! combination of the other parameters, with a title, axis labels with units, ticks and a
+//! legend under the plot. The x axis has a tick at each value swept (`tick_stride` thins the
+//! labels uniformly where they would touch); each line has its own dash pattern and marker,
+//! so that lines with equal values stay visible, and the legend names such a line's twin.
 
 use super::ResultRow;
 use image::RgbaImage;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
 /// Plot size in pixels.
@@ -179,11 +183,23 @@ pub fn metric_plot(
     }
     let other_names = others(parameters, x_param);
     let legend_lines = series.len().min(LEGEND_ROWS) + usize::from(series.len() > LEGEND_ROWS);
-    let legend_height = 16 + 20 * legend_lines as u32;
+    let legend_height = 16 + 22 * legend_lines as u32;
     let x_label = match parameter_unit(&parameters[x_param]) {
         Some(unit) => format!("{} ({unit})", parameters[x_param]),
         None => parameters[x_param].clone(),
     };
+    // The axis's ticks: one per distinct value, at its position, labelled with the value as
+    // given; a subset at a uniform stride where the labels would touch.
+    let mut distinct: Vec<(f64, String)> = Vec::new();
+    for (r, &x) in rows.iter().zip(&xs) {
+        if !distinct.iter().any(|d| d.0 == x) {
+            distinct.push((x, r.values[x_param].clone()));
+        }
+    }
+    distinct.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let y_step = y_hi / 10.0;
+    // Every text, drawn with crate::font after plotters has drawn the rest.
+    let mut texts: Vec<PlotText> = Vec::new();
 
     let mut buffer = vec![255u8; (WIDTH * HEIGHT * 3) as usize];
     {
@@ -191,95 +207,368 @@ pub fn metric_plot(
         let root = BitMapBackend::with_buffer(&mut buffer, (WIDTH, HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw_error(&e))?;
         let (upper, lower) = root.split_vertically(HEIGHT - legend_height);
-        let title = format!("{} against {}", metric.title(), parameters[x_param]);
         let mut chart = ChartBuilder::on(&upper)
-            .caption(title, (FAMILY, 24))
             .margin(14)
+            .margin_top(50)
             .x_label_area_size(54)
             .y_label_area_size(84)
             .build_cartesian_2d(x_lo..x_hi, 0f64..y_hi)
             .map_err(|e| draw_error(&e))?;
-        let category_label = |x: &f64| -> String {
-            let i = x.round();
-            if (x - i).abs() < 1e-6 && i >= 0.0 {
-                categories.get(i as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
+        // The axes only: grid lines and labels are drawn here, at the values' positions.
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(0)
+            .y_labels(0)
+            .axis_style(RGBColor(90, 90, 90))
+            .draw()
+            .map_err(|e| draw_error(&e))?;
+        let grid = RGBColor(225, 225, 225);
+        let ink = RGBColor(90, 90, 90);
+        let (x_range, y_range) = chart.plotting_area().get_pixel_range();
+        let (plot_left, plot_bottom) = (x_range.start as f32, y_range.end as f32);
+        for k in 0..=10 {
+            let y = k as f64 * y_step;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(x_lo, y), (x_hi, y)],
+                    grid,
+                )))
+                .map_err(|e| draw_error(&e))?;
+            let (_, py) = chart.backend_coord(&(x_lo, y));
+            texts.push(PlotText::new(
+                format_tick(y, y_step),
+                plot_left - 8.0,
+                py as f32,
+                TICK_PX,
+                Anchor::Right,
+            ));
+        }
+        let pixel_x: Vec<f32> = distinct
+            .iter()
+            .map(|(x, _)| chart.backend_coord(&(*x, 0.0)).0 as f32)
+            .collect();
+        let widths: Vec<f32> = distinct
+            .iter()
+            .map(|(_, label)| crate::font::text_width(label, TICK_PX))
+            .collect();
+        let stride = tick_stride(&pixel_x, &widths, 10.0);
+        for (k, ((x, label), &px)) in distinct.iter().zip(&pixel_x).enumerate() {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(*x, 0.0), (*x, y_hi)],
+                    grid,
+                )))
+                .map_err(|e| draw_error(&e))?;
+            if k % stride == 0 {
+                upper
+                    .draw(&PathElement::new(
+                        vec![
+                            (px as i32, plot_bottom as i32),
+                            (px as i32, plot_bottom as i32 + 5),
+                        ],
+                        ink,
+                    ))
+                    .map_err(|e| draw_error(&e))?;
+                texts.push(PlotText::new(
+                    label.clone(),
+                    px,
+                    plot_bottom + 16.0,
+                    TICK_PX,
+                    Anchor::Centre,
+                ));
             }
-        };
-        let y_label = |y: &f64| format_tick(*y, y_hi / 40.0);
-        let x_span = (x_hi - x_lo).max(1e-9);
-        let number_label = |x: &f64| format_tick(*x, x_span / 40.0);
-        let mut mesh = chart.configure_mesh();
-        mesh.x_desc(x_label.as_str())
-            .y_desc(metric.axis_label())
-            .label_style((FAMILY, 14))
-            .axis_desc_style((FAMILY, 16))
-            .y_label_formatter(&y_label)
-            .light_line_style(RGBColor(240, 240, 240))
-            .bold_line_style(RGBColor(215, 215, 215));
-        if numeric.is_none() {
-            mesh.x_labels(categories.len().max(2) * 2 + 1)
-                .x_label_formatter(&category_label);
-        } else {
-            mesh.x_label_formatter(&number_label);
         }
-        mesh.draw().map_err(|e| draw_error(&e))?;
+        // Series in order; a later one drawn over an earlier one with the same values leaves
+        // the earlier visible: each has its own dash pattern and marker, markers shrinking.
         for (i, (_, points)) in series.iter().enumerate() {
-            let [r, g, b] = PALETTE[i % PALETTE.len()];
-            let colour = RGBColor(r, g, b);
-            chart
-                .draw_series(LineSeries::new(
-                    points.iter().copied(),
-                    colour.stroke_width(2),
-                ))
-                .map_err(|e| draw_error(&e))?;
-            chart
-                .draw_series(points.iter().map(|&p| Circle::new(p, 4, colour.filled())))
-                .map_err(|e| draw_error(&e))?;
+            let style = SeriesStyle::of(i);
+            let pixels: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(p)).collect();
+            style.draw_line(&upper, pixels)?;
+            for &p in points {
+                let (px, py) = chart.backend_coord(&p);
+                style
+                    .draw_marker(&upper, (px, py))
+                    .map_err(|e| draw_error(&e))?;
+            }
         }
-        // The legend, under the plot: a swatch and the values of the other parameters.
-        let font = (FAMILY, 14).into_font().color(&BLACK);
-        for (i, (key, _)) in series.iter().take(LEGEND_ROWS).enumerate() {
-            let [r, g, b] = PALETTE[i % PALETTE.len()];
-            let y = 8 + 20 * i as i32;
-            lower
-                .draw(&Rectangle::new(
-                    [(98, y + 5), (126, y + 9)],
-                    RGBColor(r, g, b).filled(),
-                ))
+        // The legend, under the plot: the line's dash and marker, and the values of the other
+        // parameters; a line with the same values as an earlier one says so.
+        let (_, lower_y) = lower.get_base_pixel();
+        for (i, (key, points)) in series.iter().take(LEGEND_ROWS).enumerate() {
+            let style = SeriesStyle::of(i);
+            let y = 8 + 22 * i as i32;
+            style.draw_line(&lower, vec![(96, y + 8), (136, y + 8)])?;
+            style
+                .draw_marker(&lower, (116, y + 8))
                 .map_err(|e| draw_error(&e))?;
-            let label = if other_names.is_empty() {
-                metric.title().to_string()
-            } else {
-                other_names
-                    .iter()
-                    .zip(key)
-                    .map(|(n, v)| format!("{n} = {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            };
-            lower
-                .draw(&Text::new(label, (134, y), font.clone()))
-                .map_err(|e| draw_error(&e))?;
+            let mut label = series_label(metric, &other_names, key);
+            if let Some(j) = (0..i).find(|&j| same_points(&series[j].1, points)) {
+                label.push_str(&format!(
+                    "  (same values as {})",
+                    series_label(metric, &other_names, &series[j].0)
+                ));
+            }
+            texts.push(PlotText::new(
+                label,
+                146.0,
+                (lower_y + y + 8) as f32,
+                LEGEND_PX,
+                Anchor::Left,
+            ));
         }
         if series.len() > LEGEND_ROWS {
-            let y = 8 + 20 * LEGEND_ROWS as i32;
-            lower
-                .draw(&Text::new(
-                    format!("… and {} more lines", series.len() - LEGEND_ROWS),
-                    (134, y),
-                    font.clone(),
-                ))
-                .map_err(|e| draw_error(&e))?;
+            let y = 8 + 22 * LEGEND_ROWS as i32;
+            texts.push(PlotText::new(
+                format!("… and {} more lines", series.len() - LEGEND_ROWS),
+                146.0,
+                (lower_y + y + 8) as f32,
+                LEGEND_PX,
+                Anchor::Left,
+            ));
         }
+        texts.push(PlotText::new(
+            format!("{} against {}", metric.title(), parameters[x_param]),
+            WIDTH as f32 / 2.0,
+            26.0,
+            TITLE_PX,
+            Anchor::Centre,
+        ));
+        texts.push(PlotText::new(
+            x_label,
+            (x_range.start + x_range.end) as f32 / 2.0,
+            plot_bottom + 42.0,
+            DESC_PX,
+            Anchor::Centre,
+        ));
+        let mut y_desc = PlotText::new(
+            metric.axis_label().to_string(),
+            24.0,
+            (y_range.start + y_range.end) as f32 / 2.0,
+            DESC_PX,
+            Anchor::Centre,
+        );
+        y_desc.rotated = true;
+        texts.push(y_desc);
         root.present().map_err(|e| draw_error(&e))?;
     }
     let rgba: Vec<u8> = buffer
         .chunks_exact(3)
         .flat_map(|p| [p[0], p[1], p[2], 255])
         .collect();
-    Ok(RgbaImage::from_raw(WIDTH, HEIGHT, rgba))
+    let mut image = RgbaImage::from_raw(WIDTH, HEIGHT, rgba).ok_or("plot: buffer size")?;
+    for text in &texts {
+        text.draw(&mut image);
+    }
+    Ok(Some(image))
+}
+
+/// Text sizes, pixels ([`crate::font`]'s size).
+const TITLE_PX: f32 = 24.0;
+/// Axis descriptions.
+const DESC_PX: f32 = 16.0;
+/// Tick labels.
+const TICK_PX: f32 = 14.0;
+/// Legend entries.
+const LEGEND_PX: f32 = 14.0;
+
+/// Where a text's `x` is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Anchor {
+    Left,
+    Centre,
+    Right,
+}
+
+/// A line of text of the plot, drawn in the embedded font after plotters is done (plotters's
+/// own text drops each glyph's side bearing, which spaces letters unevenly).
+#[derive(Clone, Debug)]
+struct PlotText {
+    text: String,
+    x: f32,
+    /// The middle of its capitals.
+    y: f32,
+    px: f32,
+    anchor: Anchor,
+    /// Turned a quarter counter-clockwise, read bottom to top (the y axis's description).
+    rotated: bool,
+}
+
+impl PlotText {
+    fn new(text: String, x: f32, y: f32, px: f32, anchor: Anchor) -> Self {
+        PlotText {
+            text,
+            x,
+            y,
+            px,
+            anchor,
+            rotated: false,
+        }
+    }
+
+    /// Draws the text, dark grey, into `image` (white where rotated text goes).
+    fn draw(&self, image: &mut RgbaImage) {
+        use ab_glyph::{Font as _, ScaleFont as _};
+        const INK: [u8; 3] = [30, 30, 30];
+        let width = crate::font::text_width(&self.text, self.px);
+        let ascent = crate::font::font()
+            .as_scaled(ab_glyph::PxScale::from(self.px))
+            .ascent();
+        let cap = crate::font::cap_height(self.px);
+        let shift = match self.anchor {
+            Anchor::Left => 0.0,
+            Anchor::Centre => width / 2.0,
+            Anchor::Right => width,
+        };
+        if !self.rotated {
+            let top = self.y + cap / 2.0 - ascent;
+            crate::font::draw(image, self.x - shift, top, self.px, INK, &self.text);
+            return;
+        }
+        // Drawn level on white, turned, and laid over the plot by the darker of the two.
+        let (w, h) = (
+            width.ceil() as u32 + 4,
+            crate::font::line_height(self.px).ceil() as u32 + 4,
+        );
+        let mut level = RgbaImage::from_pixel(w, h, image::Rgba([255, 255, 255, 255]));
+        crate::font::draw(&mut level, 2.0, 2.0, self.px, INK, &self.text);
+        let turned = image::imageops::rotate270(&level);
+        let (left, top) = (
+            (self.x - h as f32 / 2.0).round() as i64,
+            (self.y - w as f32 / 2.0).round() as i64,
+        );
+        for (x, y, p) in turned.enumerate_pixels() {
+            let (tx, ty) = (left + i64::from(x), top + i64::from(y));
+            if tx >= 0 && ty >= 0 && (tx as u32) < image.width() && (ty as u32) < image.height() {
+                let q = image.get_pixel_mut(tx as u32, ty as u32);
+                for c in 0..3 {
+                    q[c] = q[c].min(p[c]);
+                }
+            }
+        }
+    }
+}
+
+/// The smallest stride `k` such that labelling every `k`-th tick (the first, then every `k`
+/// further) leaves at least `gap` pixels between labels `widths` wide centred at `positions`
+/// (sorted, pixels). 1 when every label fits.
+fn tick_stride(positions: &[f32], widths: &[f32], gap: f32) -> usize {
+    let n = positions.len().min(widths.len());
+    (1..n.max(1))
+        .find(|&k| {
+            (k..n).step_by(k).all(|i| {
+                let j = i - k;
+                positions[j] + widths[j] / 2.0 + gap <= positions[i] - widths[i] / 2.0
+            })
+        })
+        .unwrap_or(n.max(1))
+}
+
+/// A line's look: colour, dash pattern and marker, distinct for the first
+/// [`PALETTE`]`.len()` lines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SeriesStyle {
+    index: usize,
+    /// Dash length and gap, pixels (a gap of 0: solid).
+    dash: (u32, u32),
+    /// Marker half size, pixels: shrinking with the index, so that a later marker on top of
+    /// an earlier one leaves a ring of it showing.
+    size: i32,
+}
+
+impl SeriesStyle {
+    fn of(index: usize) -> Self {
+        const DASHES: [(u32, u32); 6] = [(1, 0), (10, 5), (3, 4), (14, 4), (6, 6), (2, 3)];
+        SeriesStyle {
+            index,
+            dash: DASHES[index % DASHES.len()],
+            size: (7 - 2 * (index % PALETTE.len()) as i32).max(3),
+        }
+    }
+
+    fn colour(&self) -> RGBColor {
+        let [r, g, b] = PALETTE[self.index % PALETTE.len()];
+        RGBColor(r, g, b)
+    }
+
+    /// The line through `points` (pixels of `area`), two pixels wide, in its dash pattern.
+    fn draw_line<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, plotters::coord::Shift>,
+        points: Vec<(i32, i32)>,
+    ) -> Result<(), String> {
+        let style = self.colour().stroke_width(2);
+        let (on, off) = self.dash;
+        let result = if off == 0 {
+            area.draw(&PathElement::new(points, style))
+        } else {
+            area.draw(&DashedPathElement::new(points, on, off, style))
+        };
+        result.map_err(|e| format!("plot: {e}"))
+    }
+
+    /// The line's marker at pixel `at` of `area`: circle, square, triangle, diamond, cross,
+    /// and a ring, in turn.
+    fn draw_marker<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, plotters::coord::Shift>,
+        at: (i32, i32),
+    ) -> Result<(), String> {
+        let s = self.size;
+        let fill = self.colour().filled();
+        let error = |e: &dyn std::fmt::Display| format!("plot: {e}");
+        let result = match self.index % 6 {
+            0 => area.draw(&Circle::new(at, s, fill)),
+            1 => area.draw(&Rectangle::new(
+                [(at.0 - s, at.1 - s), (at.0 + s, at.1 + s)],
+                fill,
+            )),
+            2 => area.draw(&Polygon::new(
+                vec![
+                    (at.0, at.1 - s - 1),
+                    (at.0 + s, at.1 + s),
+                    (at.0 - s, at.1 + s),
+                ],
+                fill,
+            )),
+            3 => area.draw(&Polygon::new(
+                vec![
+                    (at.0, at.1 - s),
+                    (at.0 + s, at.1),
+                    (at.0, at.1 + s),
+                    (at.0 - s, at.1),
+                ],
+                fill,
+            )),
+            4 => area.draw(&Cross::new(at, s, self.colour().stroke_width(2))),
+            _ => area.draw(&Circle::new(at, s, self.colour().stroke_width(2))),
+        };
+        result.map_err(|e| error(&e))
+    }
+}
+
+/// The legend's name of a line: the values of the other parameters (the metric's title when
+/// there are none).
+fn series_label(metric: Metric, names: &[String], key: &[String]) -> String {
+    if names.is_empty() {
+        metric.title().to_string()
+    } else {
+        names
+            .iter()
+            .zip(key)
+            .map(|(n, v)| format!("{n} = {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// Whether two lines have the same points (values equal to a part in 10⁹).
+fn same_points(a: &[(f64, f64)], b: &[(f64, f64)]) -> bool {
+    let close = |u: f64, v: f64| (u - v).abs() <= 1e-9 * u.abs().max(v.abs());
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(p, q)| close(p.0, q.0) && close(p.1, q.1))
 }
 
 /// The values of the other parameters, and the (x, y) points with those values.
@@ -453,6 +742,52 @@ mod tests {
             .filter(|p| p[0] < 80 && p[1] < 80 && p[2] < 80)
             .count();
         assert!(dark > 1500, "{dark}");
+    }
+
+    #[test]
+    fn lines_with_the_same_values_stay_visible_and_the_legend_says_so() {
+        // Two lines with the same fragment counts: the second drawn over the first used to hide
+        // it; now its dashes and smaller markers leave the first showing in the plot itself.
+        let parameters = vec![
+            "texture_resolution".to_string(),
+            "specular_tangents".to_string(),
+        ];
+        let rows = [
+            row(0, &["64", "1"], 30.0),
+            row(1, &["64", "3"], 30.0),
+            row(2, &["128", "1"], 20.0),
+            row(3, &["128", "3"], 20.0),
+        ];
+        let image = fps_plot(&parameters, &rows).expect("plot");
+        let plot_area = |rgb: [u8; 3]| {
+            coloured_pixels(&image, rgb)
+                .into_iter()
+                .filter(|p| p.1 < HEIGHT - 80)
+                .count()
+        };
+        let (first, second) = (plot_area(PALETTE[0]), plot_area(PALETTE[1]));
+        assert!(first > 150, "first line: {first} pixels");
+        assert!(second > 150, "second line: {second} pixels");
+        let series: Vec<Vec<(f64, f64)>> = vec![vec![(64.0, 30.0), (128.0, 20.0)]; 2];
+        assert!(same_points(&series[0], &series[1]));
+        assert!(!same_points(&series[0], &[(64.0, 30.0), (128.0, 21.0)]));
+        assert_ne!(SeriesStyle::of(0).dash, SeriesStyle::of(1).dash);
+        assert!(SeriesStyle::of(1).size < SeriesStyle::of(0).size);
+    }
+
+    #[test]
+    fn tick_labels_sit_at_the_points_every_one_or_at_a_uniform_stride() {
+        // Points 100 pixels apart, labels 40 wide: every one.
+        let wide: Vec<f32> = (0..5).map(|i| 100.0 * i as f32).collect();
+        assert_eq!(tick_stride(&wide, &[40.0; 5], 10.0), 1);
+        // 10 pixels apart, 20 wide, 10 between: every third (30 pixels apart).
+        let close: Vec<f32> = (0..30).map(|i| 10.0 * i as f32).collect();
+        assert_eq!(tick_stride(&close, &[20.0; 30], 10.0), 3);
+        // Uneven positions (powers of two on a linear axis): the crowded start decides.
+        let powers = [32.0, 64.0, 128.0, 256.0, 512.0].map(|v: f32| v * 0.5);
+        assert_eq!(tick_stride(&powers, &[24.0; 5], 10.0), 2);
+        assert_eq!(tick_stride(&[5.0], &[100.0], 10.0), 1);
+        assert_eq!(tick_stride(&[], &[], 10.0), 1);
     }
 
     #[test]
