@@ -29,7 +29,7 @@
 //! Beside the pipeline: [`limits`] refuses scenes too large before anything is allocated,
 //! [`export`] writes what a GPU port needs to draw the same frame, [`compare`] measures a GPU
 //! frame against the oracle's, [`sweep`] runs the thesis's parameter experiments, [`input`],
-//! [`text`], [`font`] and [`robust`] serve them, and `gpu` (feature `gpu`) draws the same
+//! [`font`] and [`robust`] serve them, and `gpu` (feature `gpu`) draws the same
 //! frame with wgpu.
 //!
 //! # A whole frame
