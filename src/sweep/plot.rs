@@ -1,10 +1,10 @@
-//! The plots of a sweep, drawn with `plotters` (bitmap backend) and their text with
-//! [`crate::font`] (the embedded DejaVu Sans, no system font): frames per second, median frame
-//! time and fragments shaded, each against the first parameter that varies, one line per
-//! combination of the other parameters, with a title, axis labels with units, ticks and a
-//! legend under the plot. The x axis has a tick at each value swept (`tick_stride` thins the
-//! labels uniformly where they would touch); each line has its own dash pattern and marker,
-//! so that lines with equal values stay visible, and the legend names such a line's twin.
+//! The plots of a sweep (beside the pipeline: sweeps), drawn with `plotters` (bitmap backend) and
+//! their text with [`crate::font`] (the embedded DejaVu Sans, no system font): frames per second,
+//! median frame time and fragments shaded, each against the first parameter that varies, one line
+//! per combination of the other parameters, with a title, axis labels with units, ticks and a
+//! legend under the plot. The x axis has a tick at each value swept (`tick_stride` thins the labels
+//! uniformly where they would touch); each line has its own dash pattern and marker, so that lines
+//! with equal values stay visible, and the legend names such a line's twin.
 
 use super::ResultRow;
 use image::RgbaImage;
