@@ -358,20 +358,11 @@ fn joints_accessor(
         count += 1;
     }
     let view = b.view(offset, Some(gj::buffer::Target::ArrayBuffer));
-    b.root.push(gj::Accessor {
-        buffer_view: Some(view),
-        byte_offset: None,
-        count: count.into(),
-        component_type: checked(gj::accessor::GenericComponentType(
-            gj::accessor::ComponentType::U16,
-        )),
-        extensions: None,
-        extras: None,
-        type_: checked(gj::accessor::Type::Vec4),
-        min: None,
-        max: None,
-        name: None,
-        normalized: false,
-        sparse: None,
-    })
+    b.accessor(
+        view,
+        count,
+        gj::accessor::ComponentType::U16,
+        gj::accessor::Type::Vec4,
+        (None, None),
+    )
 }

@@ -675,13 +675,29 @@ impl GltfBuilder {
             min = Some(json!(lo));
             max = Some(json!(hi));
         }
+        self.accessor(
+            view,
+            data.len() / n,
+            gj::accessor::ComponentType::F32,
+            kind,
+            (min, max),
+        )
+    }
+
+    /// An accessor of `count` tightly packed elements of `view`.
+    fn accessor(
+        &mut self,
+        view: gj::Index<gj::buffer::View>,
+        count: usize,
+        component: gj::accessor::ComponentType,
+        kind: gj::accessor::Type,
+        (min, max): (Option<Value>, Option<Value>),
+    ) -> gj::Index<gj::Accessor> {
         self.root.push(gj::Accessor {
             buffer_view: Some(view),
             byte_offset: None,
-            count: (data.len() / n).into(),
-            component_type: checked(gj::accessor::GenericComponentType(
-                gj::accessor::ComponentType::F32,
-            )),
+            count: count.into(),
+            component_type: checked(gj::accessor::GenericComponentType(component)),
             extensions: None,
             extras: None,
             type_: checked(kind),
@@ -710,22 +726,13 @@ impl GltfBuilder {
             self.bin.extend_from_slice(&i.to_le_bytes());
         }
         let view = self.view(offset, Some(gj::buffer::Target::ElementArrayBuffer));
-        self.root.push(gj::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: (triangles.len() * 3).into(),
-            component_type: checked(gj::accessor::GenericComponentType(
-                gj::accessor::ComponentType::U32,
-            )),
-            extensions: None,
-            extras: None,
-            type_: checked(gj::accessor::Type::Scalar),
-            min: None,
-            max: None,
-            name: None,
-            normalized: false,
-            sparse: None,
-        })
+        self.accessor(
+            view,
+            triangles.len() * 3,
+            gj::accessor::ComponentType::U32,
+            gj::accessor::Type::Scalar,
+            (None, None),
+        )
     }
 
     /// A texture of a PNG under the export folder (`file` relative to it), with `sampler`.
