@@ -301,14 +301,6 @@ pub(super) fn character(
         extras: None,
     });
     b.root.scene = Some(scene);
-    b.align();
-    b.root.buffers.push(gj::Buffer {
-        byte_length: b.bin.len().into(),
-        name: None,
-        uri: Some("character.bin".into()),
-        extensions: None,
-        extras: None,
-    });
 
     let palette = prepared
         .skinning_at(time)
@@ -336,9 +328,10 @@ pub(super) fn character(
             "tangent_frame": "rebuilt on the posed surface from the skinned dp/du, dp/dv and normal (eq. 3.1–3.3), not skinned from the bind frame",
         },
     });
+    let (gltf, bin) = b.finish("character.bin");
     Ok(Some(CharacterFiles {
-        gltf: b.root,
-        bin: b.bin,
+        gltf,
+        bin,
         joints: joints_json,
     }))
 }

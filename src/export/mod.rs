@@ -610,6 +610,19 @@ fn checked<T>(value: T) -> gj::validation::Checked<T> {
 }
 
 impl GltfBuilder {
+    /// The document with its one buffer, `uri` (beside the `.gltf`), and the buffer's bytes.
+    fn finish(mut self, uri: &str) -> (gj::Root, Vec<u8>) {
+        self.align();
+        self.root.buffers.push(gj::Buffer {
+            byte_length: self.bin.len().into(),
+            name: None,
+            uri: Some(uri.into()),
+            extensions: None,
+            extras: None,
+        });
+        (self.root, self.bin)
+    }
+
     fn align(&mut self) {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
@@ -1003,13 +1016,5 @@ fn gltf(
         })),
     });
     b.root.scene = Some(scene);
-    b.align();
-    b.root.buffers.push(gj::Buffer {
-        byte_length: b.bin.len().into(),
-        name: None,
-        uri: Some("fur.bin".into()),
-        extensions: None,
-        extras: None,
-    });
-    (b.root, b.bin)
+    b.finish("fur.bin")
 }
