@@ -198,6 +198,41 @@ fn shards_merge_into_the_whole_sweep() {
         &[&shard_dirs[0], &tampered, &shard_dirs[2]],
         "does not belong to shard 2/3",
     );
+    // A shard's point images must be there, be images, and lie inside the shard.
+    let copy_of_second = |name: &str| {
+        let copy = dir.join(name);
+        std::fs::create_dir_all(&copy).expect("dir");
+        for entry in std::fs::read_dir(&shard_dirs[1]).expect("list") {
+            let entry = entry.expect("entry");
+            std::fs::copy(entry.path(), copy.join(entry.file_name())).expect("copy");
+        }
+        let csv = std::fs::read_to_string(copy.join("results.csv")).expect("csv");
+        let point: usize = csv.lines().nth(1).expect("a row")[..1]
+            .parse()
+            .expect("point");
+        (copy.clone(), copy.join(format!("point_{point:04}.png")))
+    };
+    let (missing, image) = copy_of_second("missing");
+    std::fs::remove_file(&image).expect("remove");
+    refused(&[&shard_dirs[0], &missing, &shard_dirs[2]], "is missing");
+    let (not_image, image) = copy_of_second("not_image");
+    std::fs::write(&image, "not a PNG").expect("write");
+    refused(
+        &[&shard_dirs[0], &not_image, &shard_dirs[2]],
+        "is not an image",
+    );
+    #[cfg(unix)]
+    {
+        let (linked, image) = copy_of_second("linked");
+        let outside = dir.join("outside.png");
+        std::fs::copy(&image, &outside).expect("copy");
+        std::fs::remove_file(&image).expect("remove");
+        std::os::unix::fs::symlink(&outside, &image).expect("link");
+        refused(
+            &[&shard_dirs[0], &linked, &shard_dirs[2]],
+            "outside the shard",
+        );
+    }
 }
 
 #[test]

@@ -160,7 +160,7 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                         pelage::compare::legend::Legend::Heat,
                     );
                     super::write_png(
-                        &output.join(format!("point_{:04}_diff.png", point.index)),
+                        &output.join(diff_file(point.index)),
                         heat.width(),
                         heat.height(),
                         &heat,
@@ -181,7 +181,9 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
                     median_frame_ms: median,
                     min_frame_ms: times[0],
                     max_frame_ms: times[times.len() - 1],
-                    fps: 1e3 / median,
+                    // A frame under a nanosecond (a coarse clock) counts as one: the rate
+                    // stays finite, as results.csv requires.
+                    fps: 1e3 / median.max(1e-6),
                     fragments_shaded,
                     extra,
                 });
@@ -247,7 +249,7 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
             pelage::input::read_text(&path, pelage::input::MAX_TABLE_BYTES, "shard's results")
                 .map_err(|e| Failure::bad_input(e.to_string()))?;
         let name = path.display().to_string();
-        let (_, rows) = sweep::parse_results(&text, &name).map_err(bad)?;
+        let results = sweep::parse_results(&text, &name).map_err(bad)?;
         let manifest_path = dir.join(sweep::MANIFEST_FILE);
         let manifest_text = pelage::input::read_text(&manifest_path, 4096, "sweep manifest")
             .map_err(|e| {
@@ -260,12 +262,30 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
         shards.push((
             dir.display().to_string(),
             manifest,
-            rows.iter().map(|r| r.point).collect::<Vec<_>>(),
+            results.rows.iter().map(|r| r.point).collect::<Vec<_>>(),
         ));
         files.push((name, text));
     }
     sweep::check_shards(&shards).map_err(bad)?;
-    let (names, rows) = sweep::merge_results(&files).map_err(bad)?;
+    let merged = sweep::merge_results(&files).map_err(bad)?;
+    // Each point's images come from the shard that holds its row, checked before anything is
+    // written: each must be there, be an image, and lie inside its shard.
+    let mut holder = std::collections::HashMap::new();
+    for (index, (_, _, points)) in shards.iter().enumerate() {
+        holder.extend(points.iter().map(|&p| (p, index)));
+    }
+    let with_diff = !merged.extra_columns.is_empty();
+    let mut copies = Vec::new();
+    for row in &merged.rows {
+        let dir = &args.shards[holder[&row.point]];
+        let mut names = vec![point_file(row.point)];
+        if with_diff {
+            names.push(diff_file(row.point));
+        }
+        for name in names {
+            copies.push((point_image(dir, &name, row.point)?, name));
+        }
+    }
     let manifest = sweep::Manifest {
         shard: None,
         ..shards[0].1.clone()
@@ -273,29 +293,50 @@ pub fn merge(args: MergeArgs) -> Result<(), Failure> {
     let folder = StagedFolder::create(&args.output, sweep_folder_entries())?;
     let output = folder.path().to_path_buf();
     // The point renders come along, so the merged folder is a whole sweep.
-    for row in &rows {
-        let file = point_file(row.point);
-        if let Some(source) = args
-            .shards
-            .iter()
-            .map(|d| d.join(&file))
-            .find(|p| p.is_file())
-        {
-            let bytes =
-                pelage::input::read(&source, pelage::input::MAX_IMAGE_FILE_BYTES, "point image")
-                    .map_err(|e| Failure::bad_input(e.to_string()))?;
-            pelage::output::write_atomic(&output.join(&file), &bytes)
-                .map_err(|e| Failure::other(e.to_string()))?;
-        }
+    for (source, name) in copies {
+        let bytes =
+            pelage::input::read(&source, pelage::input::MAX_IMAGE_FILE_BYTES, "point image")
+                .map_err(|e| Failure::bad_input(e.to_string()))?;
+        pelage::output::write_atomic(&output.join(&name), &bytes)
+            .map_err(|e| Failure::other(e.to_string()))?;
     }
     write_summary(
         &output,
-        &names,
-        &rows,
+        &merged.parameters,
+        &merged.rows,
         &manifest,
         super::max_memory(args.max_memory),
     )?;
     folder.commit()
+}
+
+/// The image `name` of point `point` in the shard folder `dir`, checked for merging: it exists,
+/// its header reads as an image, and it resolves to a file inside the shard (a link to a file
+/// elsewhere would copy that file's bytes into the merged sweep).
+fn point_image(dir: &Path, name: &str, point: usize) -> Result<std::path::PathBuf, Failure> {
+    let path = dir.join(name);
+    let fail = |why: String| {
+        Failure::bad_input(format!(
+            "{}: point {point}'s image {why}; run that shard again",
+            path.display()
+        ))
+    };
+    let resolved = path.canonicalize().map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => fail("is missing".into()),
+        _ => fail(format!("cannot be read: {e}")),
+    })?;
+    let shard = dir
+        .canonicalize()
+        .map_err(|e| fail(format!("cannot be read: {e}")))?;
+    if !resolved.starts_with(&shard) {
+        return Err(fail(format!(
+            "is a link to {}, outside the shard",
+            resolved.display()
+        )));
+    }
+    pelage::input::image_size(&resolved, "point image")
+        .map_err(|e| fail(format!("is not an image ({})", e.message)))?;
+    Ok(resolved)
 }
 
 /// Refuses a contact sheet of renders of `sizes`, labelled with `label_lines` lines each, that
@@ -414,6 +455,11 @@ impl Renderer {
 
 fn point_file(index: usize) -> String {
     format!("point_{index:04}.png")
+}
+
+/// The heat map against the oracle of point `index` (`--against-oracle`).
+fn diff_file(index: usize) -> String {
+    format!("point_{index:04}_diff.png")
 }
 
 /// results.csv, the contact sheet (from the point PNGs in `dir`) and the fps plot. The sheet's

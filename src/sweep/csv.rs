@@ -70,9 +70,22 @@ pub fn write_results(parameters: &[String], rows: &[ResultRow]) -> Result<String
     String::from_utf8(bytes).map_err(|e| SweepError(format!("results.csv: {e}")))
 }
 
-/// Reads `results.csv` text written by [`write_results`]: the parameter names and the rows.
-/// `file` names the file in errors.
-pub fn parse_results(text: &str, file: &str) -> Result<(Vec<String>, Vec<ResultRow>), SweepError> {
+/// A `results.csv` as read: its columns and rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Results {
+    /// The parameter columns, in order.
+    pub parameters: Vec<String>,
+    /// The extra columns after the measurements (`--against-oracle`'s metrics), in order.
+    pub extra_columns: Vec<String>,
+    /// The rows, in file order.
+    pub rows: Vec<ResultRow>,
+}
+
+/// Reads `results.csv` text written by [`write_results`]. `file` names the file in errors.
+/// Measurements must be finite and not negative, points below [`super::MAX_POINTS`] and at most
+/// that many rows: a hand-edited value that no sweep writes is refused here, naming its line,
+/// rather than sizing a plot or a loop.
+pub fn parse_results(text: &str, file: &str) -> Result<Results, SweepError> {
     let mut reader = csv::Reader::from_reader(text.as_bytes());
     let header: Vec<String> = reader
         .headers()
@@ -107,20 +120,35 @@ pub fn parse_results(text: &str, file: &str) -> Result<(Vec<String>, Vec<ResultR
                 header.len()
             )));
         }
+        if rows.len() == super::MAX_POINTS {
+            return Err(SweepError(format!(
+                "{file}:{line}: more than {} rows (a sweep has at most as many points)",
+                super::MAX_POINTS
+            )));
+        }
         let number = |column: usize| -> Result<f64, SweepError> {
-            record[column].parse().map_err(|_| {
-                SweepError(format!(
-                    "{file}:{line}: {} {:?} is not a number",
-                    header[column], &record[column]
-                ))
-            })
+            record[column]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| {
+                    SweepError(format!(
+                        "{file}:{line}: {} {:?} is not a finite number ≥ 0",
+                        header[column], &record[column]
+                    ))
+                })
         };
-        let point = record[0].parse().map_err(|_| {
-            SweepError(format!(
-                "{file}:{line}: point {:?} is not a number",
-                &record[0]
-            ))
-        })?;
+        let point = record[0]
+            .parse::<usize>()
+            .ok()
+            .filter(|&p| p < super::MAX_POINTS)
+            .ok_or_else(|| {
+                SweepError(format!(
+                    "{file}:{line}: point {:?} is not a point number (0 to {})",
+                    &record[0],
+                    super::MAX_POINTS - 1
+                ))
+            })?;
         let m = first_measure;
         rows.push(ResultRow {
             point,
@@ -143,46 +171,56 @@ pub fn parse_results(text: &str, file: &str) -> Result<(Vec<String>, Vec<ResultR
                 .collect(),
         });
     }
-    Ok((parameters, rows))
+    Ok(Results {
+        parameters,
+        extra_columns: extra_names.to_vec(),
+        rows,
+    })
 }
 
-/// Merges shards' results (`(file name, text)` pairs): the same columns in every file, no point
-/// twice; rows ordered by point.
-pub fn merge_results(
-    files: &[(String, String)],
-) -> Result<(Vec<String>, Vec<ResultRow>), SweepError> {
-    let mut merged: Option<(String, Vec<String>, Vec<String>)> = None;
-    let mut rows: Vec<(ResultRow, String)> = Vec::new();
-    for (file, text) in files {
-        let (parameters, file_rows) = parse_results(text, file)?;
-        let extra: Vec<String> = file_rows
-            .first()
-            .map(|r| r.extra.iter().map(|(n, _)| n.clone()).collect())
-            .unwrap_or_default();
-        match &merged {
-            None => merged = Some((file.clone(), parameters, extra)),
-            Some((first, p, _)) if *p != parameters => {
-                return Err(SweepError(format!(
-                    "{file}: parameters {parameters:?} differ from {first}'s {p:?}"
-                )));
+/// Merges shards' results (`(file name, text)` pairs): the same columns in every file (the
+/// parameters and the extra columns alike, so that no value is merged under another column's
+/// name), no point twice; rows ordered by point.
+pub fn merge_results(files: &[(String, String)]) -> Result<Results, SweepError> {
+    let mut merged: Option<(String, Results)> = None;
+    let mut origins: Vec<(usize, usize)> = Vec::new();
+    for (index, (file, text)) in files.iter().enumerate() {
+        let results = parse_results(text, file)?;
+        origins.extend(results.rows.iter().map(|r| (r.point, index)));
+        match &mut merged {
+            None => merged = Some((file.clone(), results)),
+            Some((first, m)) => {
+                if m.parameters != results.parameters {
+                    return Err(SweepError(format!(
+                        "{file}: parameters {:?} differ from {first}'s {:?}",
+                        results.parameters, m.parameters
+                    )));
+                }
+                if m.extra_columns != results.extra_columns {
+                    return Err(SweepError(format!(
+                        "{file}: columns after the measurements {:?} differ from {first}'s {:?} \
+                         (shards of one sweep are run with the same options)",
+                        results.extra_columns, m.extra_columns
+                    )));
+                }
+                m.rows.extend(results.rows);
             }
-            Some(_) => {}
         }
-        rows.extend(file_rows.into_iter().map(|r| (r, file.clone())));
     }
-    let Some((_, parameters, _)) = merged else {
+    let Some((_, mut merged)) = merged else {
         return Err(SweepError("nothing to merge: no results.csv given".into()));
     };
-    rows.sort_by_key(|(r, _)| r.point);
-    for pair in rows.windows(2) {
-        if pair[0].0.point == pair[1].0.point {
+    origins.sort_unstable();
+    for pair in origins.windows(2) {
+        if pair[0].0 == pair[1].0 {
             return Err(SweepError(format!(
                 "point {} is in both {} and {}",
-                pair[0].0.point, pair[0].1, pair[1].1
+                pair[0].0, files[pair[0].1].0, files[pair[1].1].0
             )));
         }
     }
-    Ok((parameters, rows.into_iter().map(|(r, _)| r).collect()))
+    merged.rows.sort_by_key(|r| r.point);
+    Ok(merged)
 }
 
 #[cfg(test)]
@@ -213,8 +251,13 @@ mod tests {
         let text = write_results(&parameters, &rows).expect("csv");
         assert!(text.starts_with("point,number_of_shells,light.direction,bake_ms,"));
         assert!(text.contains("\"[1, 0, 0]\""));
-        let (p, back) = parse_results(&text, "r.csv").expect("parse");
+        let Results {
+            parameters: p,
+            extra_columns,
+            rows: back,
+        } = parse_results(&text, "r.csv").expect("parse");
         assert_eq!(p, parameters);
+        assert_eq!(extra_columns, ["psnr"]);
         assert_eq!(back.len(), 2);
         assert_eq!(back[1].values, rows[1].values);
         assert_eq!(back[1].fps, 4.0);
@@ -226,10 +269,11 @@ mod tests {
         let parameters = vec!["a".to_string(), "b".to_string()];
         let one = write_results(&parameters, &[row(0, "1", 2.0), row(2, "3", 2.0)]).unwrap();
         let two = write_results(&parameters, &[row(1, "2", 2.0)]).unwrap();
-        let (_, rows) =
-            merge_results(&[("1.csv".into(), one.clone()), ("2.csv".into(), two)]).unwrap();
+        let rows = merge_results(&[("1.csv".into(), one.clone()), ("2.csv".into(), two)])
+            .unwrap()
+            .rows;
         assert_eq!(rows.iter().map(|r| r.point).collect::<Vec<_>>(), [0, 1, 2]);
-        let err = merge_results(&[("1.csv".into(), one.clone()), ("x.csv".into(), one)])
+        let err = merge_results(&[("1.csv".into(), one.clone()), ("x.csv".into(), one.clone())])
             .expect_err("duplicate points");
         assert!(err.0.contains("point 0"), "{err}");
         let other = write_results(&["c".to_string()], &[]).unwrap();
@@ -239,6 +283,21 @@ mod tests {
         ])
         .expect_err("different parameters");
         assert!(err.0.contains("2.csv"), "{err}");
+        // The same parameters but other extra columns: FLIP values are not merged as PSNR.
+        let mut flip = row(1, "2", 2.0);
+        flip.extra = vec![("flip_mean".into(), "0.01".into())];
+        let three = write_results(&parameters, &[flip]).unwrap();
+        let err = merge_results(&[("1.csv".into(), one.clone()), ("3.csv".into(), three)])
+            .expect_err("different extra columns");
+        assert!(
+            err.0.contains("3.csv") && err.0.contains("flip_mean"),
+            "{err}"
+        );
+        // A shard without rows still has its header's columns checked.
+        let empty = write_results(&parameters, &[]).unwrap();
+        let err = merge_results(&[("1.csv".into(), one), ("4.csv".into(), empty)])
+            .expect_err("no extra columns");
+        assert!(err.0.contains("4.csv"), "{err}");
     }
 
     #[test]
@@ -250,5 +309,24 @@ mod tests {
             .replace("1234", "many");
         let err = parse_results(&text, "r.csv").expect_err("bad number");
         assert!(err.0.starts_with("r.csv:2:"), "{err}");
+        let good = write_results(&["a".into(), "b".into()], &[row(0, "1", 2.0)]).unwrap();
+        for (from, to) in [
+            (",2.000,", ",1e308,"),
+            (",2.000,", ",inf,"),
+            (",2.000,", ",NaN,"),
+            (",2.000,", ",-2,"),
+            ("\n0,", "\n18446744073709551615,"),
+            ("\n0,", "\n100000,"),
+        ] {
+            let text = good.replacen(from, to, 1);
+            assert_ne!(text, good, "{from} is in {good}");
+            if to == ",1e308," {
+                // Finite: read, and left to the plot to place.
+                parse_results(&text, "r.csv").expect("finite");
+                continue;
+            }
+            let err = parse_results(&text, "r.csv").expect_err(to);
+            assert!(err.0.starts_with("r.csv:2:"), "{to}: {err}");
+        }
     }
 }

@@ -10,6 +10,7 @@ use super::ResultRow;
 use image::RgbaImage;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use std::collections::{HashMap, HashSet};
 
 /// Plot size in pixels.
 pub const WIDTH: u32 = 900;
@@ -135,32 +136,41 @@ pub fn metric_plot(
                 .filter(|v| v.is_finite())
         })
         .collect();
-    // Categories: the distinct values of the axis parameter in order of appearance.
-    let mut categories: Vec<String> = Vec::new();
+    // Categories: the distinct values of the axis parameter in order of appearance. (Every
+    // per-row step below is a lookup, never a scan: a sweep has up to MAX_POINTS rows.)
+    let mut category_of: HashMap<&str, usize> = HashMap::new();
     for r in rows {
-        if !categories.contains(&r.values[x_param]) {
-            categories.push(r.values[x_param].clone());
-        }
+        let next = category_of.len();
+        category_of
+            .entry(r.values[x_param].as_str())
+            .or_insert(next);
     }
-    let xs: Vec<f64> = match &numeric {
+    let values: Vec<f64> = match &numeric {
         Some(v) => v.clone(),
         None => rows
             .iter()
-            .map(|r| {
-                categories
-                    .iter()
-                    .position(|c| *c == r.values[x_param])
-                    .unwrap_or(0) as f64
-            })
+            .map(|r| category_of[r.values[x_param].as_str()] as f64)
             .collect(),
     };
-    let (x_min, x_max) = span(&xs);
-    let pad = if x_max > x_min {
-        (x_max - x_min) * 0.05
+    // The axis is the values' span mapped onto 0..1, computed in halves so that no finite
+    // values (±1e308 among them) overflow it.
+    let (x_min, x_max) = span(&values);
+    let half_span = x_max / 2.0 - x_min / 2.0;
+    let xs: Vec<f64> = values
+        .iter()
+        .map(|&v| {
+            if half_span > 0.0 {
+                (v / 2.0 - x_min / 2.0) / half_span
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let (x_lo, x_hi) = if half_span > 0.0 {
+        (-0.05, 1.05)
     } else {
-        0.5
+        (-0.5, 0.5)
     };
-    let (x_lo, x_hi) = (x_min - pad, x_max + pad);
     let y_top = rows
         .iter()
         .map(|r| metric.value(r))
@@ -170,13 +180,15 @@ pub fn metric_plot(
 
     // Series: rows grouped by the values of the other parameters, in order of appearance.
     let mut series: Vec<Series> = Vec::new();
+    let mut series_of: HashMap<Vec<String>, usize> = HashMap::new();
     for (r, &x) in rows.iter().zip(&xs) {
         let key = others(&r.values, x_param);
         let y = metric.value(r);
-        match series.iter_mut().find(|(k, _)| *k == key) {
-            Some((_, points)) => points.push((x, y)),
-            None => series.push((key, vec![(x, y)])),
-        }
+        let index = *series_of.entry(key.clone()).or_insert_with(|| {
+            series.push((key, Vec::new()));
+            series.len() - 1
+        });
+        series[index].1.push((x, y));
     }
     for (_, points) in &mut series {
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -191,8 +203,9 @@ pub fn metric_plot(
     // The axis's ticks: one per distinct value, at its position, labelled with the value as
     // given; a subset at a uniform stride where the labels would touch.
     let mut distinct: Vec<(f64, String)> = Vec::new();
+    let mut seen: HashSet<u64> = HashSet::new();
     for (r, &x) in rows.iter().zip(&xs) {
-        if !distinct.iter().any(|d| d.0 == x) {
+        if seen.insert(x.to_bits()) {
             distinct.push((x, r.values[x_param].clone()));
         }
     }
@@ -590,14 +603,16 @@ fn span(xs: &[f64]) -> (f64, f64) {
     (min, max)
 }
 
-/// The smallest of 1, 2, 2.5, 5 × 10^k at or above `v`.
+/// The smallest of 1, 2, 2.5, 5 × 10^k at or above `v`; `v` itself where that would not be
+/// finite (values near `f64::MAX`), so that the axis always has a finite top.
 fn nice_ceiling(v: f64) -> f64 {
     let magnitude = 10f64.powf(v.log10().floor());
     [1.0, 2.0, 2.5, 5.0, 10.0]
         .iter()
         .map(|m| m * magnitude)
         .find(|&c| c >= v)
-        .unwrap_or(10.0 * magnitude)
+        .filter(|c| c.is_finite())
+        .unwrap_or(v)
 }
 
 /// A tick label of `v` with as many decimals as a tick spacing of about `step` needs, trailing
@@ -805,5 +820,37 @@ mod tests {
         assert_eq!(nice_ceiling(0.21), 0.25);
         assert_eq!(nice_ceiling(100.0), 100.0);
         assert_eq!(nice_ceiling(1.5), 2.0);
+        assert_eq!(nice_ceiling(1.7e308), 1.7e308, "finite near f64::MAX");
+    }
+
+    #[test]
+    fn the_largest_finite_values_are_placed_on_the_axis() {
+        // ±1e308 on the x axis and 1.7e308 on the y axis: the ranges stay finite.
+        let rows = [
+            row(0, &["-1e308"], 1.0),
+            row(1, &["1e308"], 1.7e308),
+            row(2, &["0"], 3.0),
+        ];
+        let image = metric_plot(&["x".to_string()], &rows, Metric::Fps)
+            .expect("drawn")
+            .expect("a plot");
+        assert!(!coloured_pixels(&image, PALETTE[0]).is_empty());
+    }
+
+    #[test]
+    fn the_most_points_a_sweep_has_plot_in_one_pass() {
+        // 100,000 rows, 1,000 lines of 100 values: grouping, categories and ticks are lookups
+        // (this took minutes when each row scanned the ones before it).
+        let rows: Vec<ResultRow> = (0..crate::sweep::MAX_POINTS)
+            .map(|p| {
+                let (a, b) = (p / 1000, p % 1000);
+                row(p, &[&format!("v{a}"), &b.to_string()], 1.0 + b as f64)
+            })
+            .collect();
+        let names = ["a".to_string(), "b".to_string()];
+        let image = metric_plot(&names, &rows, Metric::Fps)
+            .expect("drawn")
+            .expect("a plot");
+        assert_eq!(image.dimensions(), (WIDTH, HEIGHT));
     }
 }
