@@ -92,9 +92,14 @@ pub fn read_text(path: &Path, max_bytes: u64, what: &str) -> Result<String, Inpu
 /// its header, before it is decoded, when a side is 0 or the image is larger than the renderer
 /// itself may draw ([`crate::raster::framebuffer::check_size`]).
 pub fn read_image(path: &Path, what: &str) -> Result<image::RgbaImage, InputError> {
-    let bytes = read(path, MAX_IMAGE_FILE_BYTES, what)?;
+    decode_image(&read(path, MAX_IMAGE_FILE_BYTES, what)?, path, what)
+}
+
+/// [`read_image`] on the file's bytes (`path` names it in errors): the one decoding path of
+/// `compare`, the sweep's contact sheet and the fuzz target `image`.
+pub fn decode_image(bytes: &[u8], path: &Path, what: &str) -> Result<image::RgbaImage, InputError> {
     let reader = |pixels: (u32, u32)| {
-        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| error(path, format!("cannot read the {what}: {e}")))?;
         reader.limits(decoder_limits(pixels));

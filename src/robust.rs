@@ -11,6 +11,11 @@
 //! - [`triangle`]: clipping, triangle setup, binning and rasterization of one triangle with
 //!   arbitrary clip coordinates (NaN, infinities, 1e30, crossing the camera plane). Invariant:
 //!   set-up bounds lie inside the viewport and the float framebuffer holds no NaN.
+//! - [`sweep_files`]: `sweep.txt` and `results.csv` as `sweep-merge` reads them, then the merge
+//!   and the plots. Invariant: what parses merges or is refused, and every plot draws.
+//! - [`image_bytes`]: `compare`'s image decoding (PNG 8/16-bit, OpenEXR, every format it
+//!   reads). Invariant: a decoded image matches itself exactly, heat maps included.
+//! - [`map_bytes`]: a scene's PNG map. Invariant: a decoded map samples to values in 0..=1.
 
 use crate::limits::{self, MeshSize, Workload};
 use crate::mesh::{self, FinWindows, Mesh};
@@ -18,7 +23,8 @@ use crate::raster::{
     BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Frame, Framebuffer, clip, setup,
 };
 use crate::scene::Scene;
-use glam::{Vec3, Vec4};
+use crate::sweep;
+use glam::{Vec2, Vec3, Vec4};
 use std::path::Path;
 
 /// Parses and validates `text` as a scene; when it is accepted, estimates its memory and bake
@@ -234,5 +240,75 @@ pub fn triangle(clip: [Vec4; 3], width: u32, height: u32, cull: CullMode) {
     frame.finish();
     for (i, c) in fb.to_rgba_f32().iter().enumerate() {
         assert!(!c.is_nan(), "pixel {i} is {c}");
+    }
+}
+
+/// `data` as a sweep folder's two files, as `sweep-merge` reads them: the manifest (`sweep.txt`),
+/// a 0 byte, then `results.csv` (without a 0 byte, all of `data` is the results). The manifest
+/// is checked against the rows' points; the results are merged, written back and plotted.
+pub fn sweep_files(data: &[u8]) {
+    let (manifest, results) = match data.iter().position(|&b| b == 0) {
+        Some(i) => (Some(&data[..i]), &data[i + 1..]),
+        None => (None, data),
+    };
+    let results = String::from_utf8_lossy(results);
+    let Ok(parsed) = sweep::parse_results(&results, "results.csv") else {
+        return;
+    };
+    if let Some(text) = manifest
+        && let Ok(m) = sweep::Manifest::parse(&String::from_utf8_lossy(text), "sweep.txt")
+    {
+        let points = parsed.rows.iter().map(|r| r.point).collect();
+        let _ = sweep::check_shards(&[("shard".to_string(), m, points)]);
+    }
+    let Ok(merged) = sweep::merge_results(&[("results.csv".to_string(), results.to_string())])
+    else {
+        return;
+    };
+    assert_eq!(
+        merged.rows.len(),
+        parsed.rows.len(),
+        "a merge keeps every row"
+    );
+    if let Ok(text) = sweep::write_results(&merged.parameters, &merged.rows) {
+        let again = sweep::parse_results(&text, "written.csv").expect("written results read");
+        assert_eq!(again.parameters, merged.parameters);
+        assert_eq!(again.rows.len(), merged.rows.len());
+    }
+    for metric in sweep::Metric::ALL {
+        sweep::metric_plot(&merged.parameters, &merged.rows, metric).expect("a plot draws");
+    }
+}
+
+/// `data` as an image file, decoded as `compare` decodes its inputs; a decoded image compared
+/// with itself passes the exact tier, and its heat maps are drawn.
+pub fn image_bytes(data: &[u8]) {
+    let Ok(image) = crate::input::decode_image(data, Path::new("fuzz.png"), "image") else {
+        return;
+    };
+    let exact = crate::compare::Tolerance::exact();
+    let result = crate::compare::compare_images(&image, &image, &exact).expect("same size");
+    assert!(result.passed(), "an image differs from itself: {result:?}");
+    crate::compare::heat_map(&image, &image).expect("heat map");
+    crate::compare::flip_heat_map(&image, &image).expect("FLIP map");
+}
+
+/// `data` as a scene's PNG map (`maps.length`); a decoded map samples to values in 0..=1.
+pub fn map_bytes(data: &[u8]) {
+    let Ok(texture) =
+        crate::render::maps::decode_png_map("maps.length", Path::new("fuzz.png"), data)
+    else {
+        return;
+    };
+    let mut maps = crate::render::maps::SurfaceMaps::none();
+    maps.length = Some(texture);
+    for uv in [
+        Vec2::ZERO,
+        Vec2::splat(0.5),
+        Vec2::new(0.999, 0.001),
+        Vec2::splat(7.3),
+    ] {
+        let length = maps.length_at(uv);
+        assert!((0.0..=1.0).contains(&length), "length {length} at {uv}");
     }
 }

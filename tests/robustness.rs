@@ -1,5 +1,6 @@
 //! Property tests with fixed seeds over the same entry points as the fuzz targets
-//! (`pelage::robust`, see `fuzz/`): random scene text, random OBJ text and random triangles.
+//! (`pelage::robust`, see `fuzz/`): random scene text, random OBJ text, random triangles, and
+//! mutated models, sweep files, images and maps.
 //! They run with every `cargo test`, so CI covers the fuzzed paths without a nightly toolchain.
 //! Each property only asks that nothing panics and the invariants of `pelage::robust` hold;
 //! refusing input with an error is fine.
@@ -335,14 +336,11 @@ proptest! {
     }
 }
 
-/// The generated tail (a glTF with a data URI) and the fox (a GLB), with bytes changed or cut.
-fn mutated_model() -> impl Strategy<Value = Vec<u8>> {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let tail = std::fs::read(root.join("scenes/meshes/tail/tail.gltf")).expect("tail.gltf");
-    let fox = std::fs::read(root.join("scenes/meshes/fox/Fox.glb")).expect("Fox.glb");
+/// One of `seeds`, with up to `max_edits` bytes changed and perhaps cut short.
+fn mutated(seeds: Vec<Vec<u8>>, max_edits: usize) -> impl Strategy<Value = Vec<u8>> {
     (
-        prop_oneof![Just(tail), Just(fox)],
-        proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+        prop::sample::select(seeds),
+        proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..max_edits),
         prop_oneof![Just(None), any::<prop::sample::Index>().prop_map(Some)],
     )
         .prop_map(|(mut bytes, edits, cut)| {
@@ -355,6 +353,96 @@ fn mutated_model() -> impl Strategy<Value = Vec<u8>> {
             }
             bytes
         })
+}
+
+/// The generated tail (a glTF with a data URI) and the fox (a GLB), with bytes changed or cut.
+fn mutated_model() -> impl Strategy<Value = Vec<u8>> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let tail = std::fs::read(root.join("scenes/meshes/tail/tail.gltf")).expect("tail.gltf");
+    let fox = std::fs::read(root.join("scenes/meshes/fox/Fox.glb")).expect("Fox.glb");
+    mutated(vec![tail, fox], 8)
+}
+
+/// A shard's `sweep.txt`, a 0 byte and its `results.csv` (as the `sweep` fuzz target takes
+/// them), written by pelage, with oracle columns and without, then mutated.
+fn mutated_sweep_files() -> impl Strategy<Value = Vec<u8>> {
+    let row = |point: usize, value: &str, extra: bool| pelage::sweep::ResultRow {
+        point,
+        values: vec![value.to_string(), "[0, 1, 0]".to_string()],
+        bake_ms: 3.5,
+        median_frame_ms: 20.0 + point as f64,
+        min_frame_ms: 19.0,
+        max_frame_ms: 40.0,
+        fps: 1000.0 / (20.0 + point as f64),
+        fragments_shaded: 123_456,
+        extra: if extra {
+            vec![
+                ("flip_mean".into(), "0.004".into()),
+                ("psnr".into(), "inf".into()),
+            ]
+        } else {
+            Vec::new()
+        },
+    };
+    let names = [
+        "number_of_shells".to_string(),
+        "light.direction".to_string(),
+    ];
+    let seeds = [false, true]
+        .into_iter()
+        .map(|extra| {
+            let rows: Vec<_> = [(0, "10"), (2, "30"), (4, "1e308")]
+                .into_iter()
+                .map(|(p, v)| row(p, v, extra))
+                .collect();
+            let manifest = pelage::sweep::Manifest {
+                id: 0x9f0c_2d4e_5a6b_7c81,
+                points: 6,
+                shard: Some(pelage::sweep::Shard { index: 1, count: 2 }),
+            };
+            let mut bytes = manifest.to_text().into_bytes();
+            bytes.push(0);
+            bytes.extend(
+                pelage::sweep::write_results(&names, &rows)
+                    .expect("csv")
+                    .bytes(),
+            );
+            bytes
+        })
+        .collect();
+    mutated(seeds, 6)
+}
+
+/// Small images in every format `compare` is given: PNG 8 and 16-bit, OpenEXR, mutated.
+fn mutated_images() -> impl Strategy<Value = Vec<u8>> {
+    let (w, h) = (5, 3);
+    let float: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 6.0).collect();
+    let bytes: Vec<u8> = (0..w * h * 4).map(|i| (i * 37 % 256) as u8).collect();
+    mutated(
+        vec![
+            pelage::output::encode_png(w, h, &bytes).expect("png"),
+            pelage::output::encode_png16(w, h, &float).expect("png16"),
+            pelage::output::encode_exr(w, h, &float).expect("exr"),
+        ],
+        6,
+    )
+}
+
+proptest! {
+    #![proptest_config(config(400, 0x5eeb))]
+    #[test]
+    fn mutated_sweep_files_never_panic(bytes in mutated_sweep_files()) {
+        pelage::robust::sweep_files(&bytes);
+    }
+}
+
+proptest! {
+    #![proptest_config(config(400, 0x1a6e))]
+    #[test]
+    fn mutated_images_never_panic(bytes in mutated_images()) {
+        pelage::robust::image_bytes(&bytes);
+        pelage::robust::map_bytes(&bytes);
+    }
 }
 
 proptest! {
@@ -371,7 +459,7 @@ proptest! {
 fn fuzz_regressions_stay_fixed() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions");
     let mut replayed = 0;
-    for target in ["scene", "obj", "triangle", "gltf"] {
+    for target in ["scene", "obj", "triangle", "gltf", "sweep", "image", "map"] {
         let Ok(entries) = std::fs::read_dir(root.join(target)) else {
             continue;
         };
@@ -381,6 +469,9 @@ fn fuzz_regressions_stay_fixed() {
                 "scene" => pelage::robust::scene_text(&String::from_utf8_lossy(&data)),
                 "obj" => pelage::robust::obj_bytes(&data),
                 "gltf" => pelage::robust::gltf_bytes(&data),
+                "sweep" => pelage::robust::sweep_files(&data),
+                "image" => pelage::robust::image_bytes(&data),
+                "map" => pelage::robust::map_bytes(&data),
                 _ => pelage::robust::triangle_bytes(&data),
             }
             replayed += 1;

@@ -52,16 +52,28 @@ fn address(setting: MapAddressSetting) -> AddressMode {
 
 /// Reads a PNG map, checking its size from the header before decoding.
 fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
+    // A regular file of bounded size (a FIFO or device would hang or never end the read).
+    let bytes =
+        crate::input::read(path, crate::input::MAX_IMAGE_FILE_BYTES, "map").map_err(|e| {
+            MapError {
+                key: key.to_string(),
+                path: path.display().to_string(),
+                message: e.message,
+            }
+        })?;
+    decode_png_map(key, path, &bytes)
+}
+
+/// A PNG map's bytes (read from `path`, the scene key `key`) as a texture: the format and the
+/// size are checked from the header before anything is decoded. (The fuzz target `map`.)
+pub fn decode_png_map(key: &str, path: &Path, bytes: &[u8]) -> Result<Texture, MapError> {
     let fail = |message: String| MapError {
         key: key.to_string(),
         path: path.display().to_string(),
         message,
     };
-    // A regular file of bounded size (a FIFO or device would hang or never end the read).
-    let bytes = crate::input::read(path, crate::input::MAX_IMAGE_FILE_BYTES, "map")
-        .map_err(|e| fail(e.message))?;
     let reader = |pixels: (u32, u32)| {
-        let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| fail(format!("cannot read the map: {e}")))?;
         reader.limits(crate::input::decoder_limits(pixels));

@@ -16,7 +16,7 @@ mod manifest;
 mod plot;
 mod sheet;
 
-pub use csv::{ResultRow, merge_results, parse_results, write_results};
+pub use csv::{ResultRow, Results, merge_results, parse_results, write_results};
 pub use manifest::{MANIFEST_FILE, Manifest, check_shards, sweep_id};
 pub use plot::{Metric, fps_plot, metric_plot};
 pub use sheet::{SheetLayout, contact_sheet};
