@@ -6,7 +6,6 @@
 use super::lanes::Vec3xN;
 use super::numeric::{finite_or_zero, saturate};
 use super::projection::{Axis, project_to_uv_dropping};
-use core::f32::consts::TAU;
 use glam::{Vec2, Vec3};
 
 /// Parameters of the directional wind.
@@ -41,38 +40,179 @@ impl Default for WindParams {
     }
 }
 
-/// Swings of the elastic return per gust cycle.
+/// The strands' natural frequency in swings per gust cycle: the spring's undamped angular
+/// frequency is `ω = 2π·VIBRATION_RATIO·frequency`.
 pub const VIBRATION_RATIO: f32 = 3.0;
+
+/// The part of each gust cycle the wind pushes (the rest of the cycle it is still).
+pub const PUSH_FRACTION: f64 = 0.5;
+
+/// The smallest damping ratio ζ of the spring: `elasticity` below `2π·VIBRATION_RATIO·0.02`
+/// acts as that, so that an undamped spring (elasticity 0) driven at a whole number of its own
+/// swings per cycle still has one steady motion.
+pub const MIN_DAMPING_RATIO: f64 = 0.02;
 
 /// The signed bend the wind gives at `time` (thesis 3.3: "two different forces acting upon a
 /// single fur; one pushing it and the other producing the vibration. Furthermore, the force
-/// that elasticity applies increases as the fur bends"), in `[−max_bend, max_bend]`.
+/// that elasticity applies increases as the fur bends"), in `[−max_bend, max_bend]`: the
+/// displacement `x` of a damped spring driven by gusts, then limited.
 ///
-/// With `c = frac(frequency·time)` the phase in the current gust cycle and `s = strength`:
-/// - push: `s·(0.5 + 0.5·sin(2πc))`, gusts between 0 and `s`;
-/// - elastic return: `−0.5·s·exp(−elasticity·c)·sin(2π·VIBRATION_RATIO·c)`, a damped
-///   oscillation restarted each cycle (it is 0 at both ends of a cycle, so the sum is
-///   continuous in time); it swings the strand back, past rest when the push is weak;
-/// - the limit: `max_bend·tanh(raw/max_bend)`, a spring that stiffens as it bends; never above
-///   `max_bend` in magnitude, nearly linear for small bends.
+/// - The spring: `x″ + 2ζω·x′ + ω²·x = ω²·F(t)`, the return force growing with the bend (Hooke),
+///   with `ω = 2π·VIBRATION_RATIO·frequency` and `ζ = max(elasticity / (2π·VIBRATION_RATIO),
+///   MIN_DAMPING_RATIO)` (so `elasticity` is the decay rate of a swing per gust cycle, as
+///   `exp(−elasticity·cycles)`; above `6π` the return is overdamped and creeps back).
+/// - The gust: `F = strength` for the first [`PUSH_FRACTION`] of each cycle of length
+///   `1/frequency`, 0 for the rest. Under the push the strand bends past `strength` and rings;
+///   when the push drops it swings back past rest (the vibration) and settles.
+/// - Time-addressable: `x(t)` is the motion the gusts repeat for ever (the periodic solution,
+///   in closed form: the spring's state at the start of a cycle is the fixed point of one cycle's
+///   linear map), so `--time t` alone gives the frame, and position and velocity are
+///   continuous at every time, cycle boundaries included (the velocity has no jump; only the
+///   acceleration steps where the push starts and stops).
+/// - The limit: `max_bend·tanh(x/max_bend)`, a spring that stiffens as it bends; never above
+///   `max_bend` in magnitude, nearly linear for small bends, smooth (so still continuous in
+///   position and velocity).
 ///
-/// Non-finite `time`, `strength`, `frequency` or `elasticity` act as 0 (frequency and
-/// elasticity by absolute value and clamp to ≥ 0 respectively); `max_bend` is clamped to
-/// `[0, 1]` (NaN → 0, no wind). Uses `libm` (`sinf`, `expf`, `tanhf`, `floorf`).
-#[inline]
+/// `frequency` 0 is a steady wind: `x = strength`. Computed in f64 (once per frame, the same
+/// value for the CPU and the GPU, whose shader receives it as a uniform) with `libm`; non-finite
+/// `time`, `strength`, `frequency` or `elasticity` act as 0 (frequency by absolute value,
+/// elasticity clamped to ≥ 0); `max_bend` is clamped to `[0, 1]` (NaN → 0, no wind).
 pub fn wind_force(time: f32, params: &WindParams) -> f32 {
     let max_bend = saturate(params.max_bend);
     if max_bend == 0.0 {
         return 0.0;
     }
-    let s = finite_or_zero(params.strength);
-    let e = finite_or_zero(params.elasticity).max(0.0);
-    let phase = finite_or_zero(params.frequency).abs() * finite_or_zero(time);
-    let phase = finite_or_zero(phase);
-    let c = phase - libm::floorf(phase);
-    let push = s * (0.5 + 0.5 * libm::sinf(TAU * c));
-    let spring = -0.5 * s * libm::expf(-e * c) * libm::sinf(TAU * VIBRATION_RATIO * c);
-    max_bend * libm::tanhf((push + spring) / max_bend)
+    let strength = f64::from(finite_or_zero(params.strength));
+    let frequency = f64::from(finite_or_zero(params.frequency).abs());
+    let elasticity = f64::from(finite_or_zero(params.elasticity).max(0.0));
+    let x = gust_spring(
+        f64::from(finite_or_zero(time)),
+        strength,
+        frequency,
+        elasticity,
+    );
+    let limit = f64::from(max_bend);
+    (limit * libm::tanh(x / limit)) as f32
+}
+
+/// The spring's displacement `x(t)` of [`wind_force`] before the limit, f64.
+fn gust_spring(time: f64, strength: f64, frequency: f64, elasticity: f64) -> f64 {
+    let phase = frequency * time;
+    if frequency == 0.0 || !phase.is_finite() {
+        return strength;
+    }
+    let period = 1.0 / frequency;
+    let omega = core::f64::consts::TAU * f64::from(VIBRATION_RATIO) * frequency;
+    let zeta =
+        (elasticity / (core::f64::consts::TAU * f64::from(VIBRATION_RATIO))).max(MIN_DAMPING_RATIO);
+    let push = SpringStep::new(omega, zeta, PUSH_FRACTION * period);
+    let rest = SpringStep::new(omega, zeta, (1.0 - PUSH_FRACTION) * period);
+    // The state (x, v) at the start of a cycle, z₀, is the fixed point of one cycle:
+    // z₀ = R·(P·(z₀ − s) + s), s = (strength, 0): (I − R·P)·z₀ = R·(I − P)·s.
+    let rp = rest.matrix.mul(&push.matrix);
+    let i_minus_p = Mat2::IDENTITY.sub(&push.matrix);
+    let rhs = rest.matrix.apply(i_minus_p.apply([strength, 0.0]));
+    let start = Mat2::IDENTITY.sub(&rp).solve(rhs);
+    let c = (phase - libm::floor(phase)) * period;
+    let push_time = PUSH_FRACTION * period;
+    if c < push_time {
+        let y = SpringStep::new(omega, zeta, c)
+            .matrix
+            .apply([start[0] - strength, start[1]]);
+        y[0] + strength
+    } else {
+        let at_drop = push.matrix.apply([start[0] - strength, start[1]]);
+        let at_drop = [at_drop[0] + strength, at_drop[1]];
+        SpringStep::new(omega, zeta, c - push_time)
+            .matrix
+            .apply(at_drop)[0]
+    }
+}
+
+/// A 2×2 matrix, rows first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Mat2([[f64; 2]; 2]);
+
+impl Mat2 {
+    const IDENTITY: Mat2 = Mat2([[1.0, 0.0], [0.0, 1.0]]);
+
+    fn mul(&self, o: &Mat2) -> Mat2 {
+        let (a, b) = (self.0, o.0);
+        Mat2([
+            [
+                a[0][0] * b[0][0] + a[0][1] * b[1][0],
+                a[0][0] * b[0][1] + a[0][1] * b[1][1],
+            ],
+            [
+                a[1][0] * b[0][0] + a[1][1] * b[1][0],
+                a[1][0] * b[0][1] + a[1][1] * b[1][1],
+            ],
+        ])
+    }
+
+    fn sub(&self, o: &Mat2) -> Mat2 {
+        let (a, b) = (self.0, o.0);
+        Mat2([
+            [a[0][0] - b[0][0], a[0][1] - b[0][1]],
+            [a[1][0] - b[1][0], a[1][1] - b[1][1]],
+        ])
+    }
+
+    fn apply(&self, v: [f64; 2]) -> [f64; 2] {
+        let a = self.0;
+        [
+            a[0][0] * v[0] + a[0][1] * v[1],
+            a[1][0] * v[0] + a[1][1] * v[1],
+        ]
+    }
+
+    /// `M⁻¹·v` by Cramer's rule (the cycle map of a damped spring is never singular: its
+    /// eigenvalues lie inside the unit circle).
+    fn solve(&self, v: [f64; 2]) -> [f64; 2] {
+        let a = self.0;
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        [
+            (v[0] * a[1][1] - a[0][1] * v[1]) / det,
+            (a[0][0] * v[1] - v[0] * a[1][0]) / det,
+        ]
+    }
+}
+
+/// The free spring's state map over a time `tau`: `(y, v) ↦ exp(A·tau)·(y, v)` with
+/// `A = [[0, 1], [−ω², −2ζω]]`, written as `e^{μτ}·(C·I + S·(A − μI))`, `μ = −ζω`,
+/// `q² = ω²(ζ² − 1)`: `C = cos, S = sin(·)/ω_d` when underdamped, `cosh, sinh(·)/q` when not
+/// (as sums of decaying exponentials, which cannot overflow), `1, τ` at critical damping.
+struct SpringStep {
+    matrix: Mat2,
+}
+
+impl SpringStep {
+    fn new(omega: f64, zeta: f64, tau: f64) -> SpringStep {
+        let mu = -zeta * omega;
+        let q2 = omega * omega * (zeta * zeta - 1.0);
+        let (c, s) = if q2 < 0.0 {
+            let wd = libm::sqrt(-q2);
+            let decay = libm::exp(mu * tau);
+            (
+                decay * libm::cos(wd * tau),
+                decay * libm::sin(wd * tau) / wd,
+            )
+        } else {
+            let q = libm::sqrt(q2);
+            let fast = libm::exp((mu - q) * tau);
+            let slow = libm::exp((mu + q) * tau);
+            let s = if q * tau < 1e-6 {
+                libm::exp(mu * tau) * tau
+            } else {
+                0.5 * (slow - fast) / q
+            };
+            (0.5 * (slow + fast), s)
+        };
+        let zw = zeta * omega;
+        SpringStep {
+            matrix: Mat2([[c + s * zw, s], [-omega * omega * s, c - s * zw]]),
+        }
+    }
 }
 
 /// Vertex-stage displacement of a shell vertex (thesis 3.3): with `ŵ`, `n̂` the normalised wind
@@ -164,15 +304,43 @@ mod tests {
     use crate::shading::test_support::{Lcg, assert_close};
     use glam::DVec3;
 
-    fn force64(time: f64, p: &WindParams) -> f64 {
-        let mb = f64::from(p.max_bend);
+    /// The spring of [`wind_force`] integrated from rest by classic Runge–Kutta (f64, 4000
+    /// steps a cycle) for `cycles` cycles and then to `time`'s phase: an independent account of
+    /// the periodic motion, which the damping makes the start forgotten.
+    fn force64(time: f64, p: &WindParams, cycles: usize) -> f64 {
+        let f = f64::from(p.frequency);
         let s = f64::from(p.strength);
-        let phase = f64::from(p.frequency).abs() * time;
-        let c = phase - phase.floor();
-        let tau = std::f64::consts::TAU;
-        let push = s * (0.5 + 0.5 * (tau * c).sin());
-        let spring = -0.5 * s * (-f64::from(p.elasticity) * c).exp() * (tau * 3.0 * c).sin();
-        mb * ((push + spring) / mb).tanh()
+        let omega = std::f64::consts::TAU * 3.0 * f;
+        let zeta = (f64::from(p.elasticity) / (std::f64::consts::TAU * 3.0)).max(0.02);
+        let period = 1.0 / f;
+        // Classic RK4 over a span of constant drive `d`, 2000 steps a half cycle.
+        let run = |(mut x, mut v): (f64, f64), d: f64, span: f64| {
+            let steps = ((span / period * 4000.0).ceil() as usize).max(1);
+            let h = span / steps as f64;
+            let a = |x: f64, v: f64| omega * omega * (d - x) - 2.0 * zeta * omega * v;
+            for _ in 0..steps {
+                let (k1x, k1v) = (v, a(x, v));
+                let (k2x, k2v) = (v + 0.5 * h * k1v, a(x + 0.5 * h * k1x, v + 0.5 * h * k1v));
+                let (k3x, k3v) = (v + 0.5 * h * k2v, a(x + 0.5 * h * k2x, v + 0.5 * h * k2v));
+                let (k4x, k4v) = (v + h * k3v, a(x + h * k3x, v + h * k3v));
+                x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+                v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            }
+            (x, v)
+        };
+        let mut state = (0.0, 0.0);
+        for _ in 0..cycles {
+            state = run(state, s, 0.5 * period);
+            state = run(state, 0.0, 0.5 * period);
+        }
+        let into = (time * f).fract() * period;
+        let (x, _) = if into < 0.5 * period {
+            run(state, s, into)
+        } else {
+            run(run(state, s, 0.5 * period), 0.0, into - 0.5 * period)
+        };
+        let mb = f64::from(p.max_bend);
+        mb * (x / mb).tanh()
     }
 
     fn random_params(rng: &mut Lcg) -> WindParams {
@@ -180,46 +348,131 @@ mod tests {
             direction: rng.direction(),
             strength: rng.range(0.0, 3.0),
             frequency: rng.range(0.1, 2.0),
-            elasticity: rng.range(0.0, 6.0),
+            elasticity: rng.range(0.0, 60.0),
             max_bend: rng.range(0.05, 1.0),
         }
     }
 
     #[test]
-    fn force_matches_f64_and_is_bounded() {
-        // Bound: the phase f·t is rounded in f32 (|err| ≤ 6e-8·phase) before the slopes
-        // 2π·(1 + VIBRATION_RATIO)·s of the sines; plus 1e-6 for libm's last-bit errors.
+    fn force_is_the_periodic_motion_of_the_driven_spring() {
+        // Against the ODE integrated from rest: after enough cycles for the start to be
+        // forgotten (the slowest swing decays as exp(−ζω·t)), within the integrator's error.
         let mut rng = Lcg::new(70);
-        for _ in 0..3000 {
+        for _ in 0..60 {
             let p = random_params(&mut rng);
             let t = rng.range(0.0, 20.0);
-            let phase = f64::from(p.frequency) * f64::from(t);
-            let slope = std::f64::consts::TAU * 4.0 * (1.0 + f64::from(p.strength));
-            let tol = 1e-6 + 1.2e-7 * (1.0 + phase) * slope;
+            let zeta = (f64::from(p.elasticity) / (std::f64::consts::TAU * 3.0)).max(0.02);
+            // Decay per cycle of the slowest mode: exp(−ζ·6π) underdamped; overdamped, the slow
+            // root ω(ζ − √(ζ²−1)) per second.
+            let slow = if zeta < 1.0 {
+                zeta * 6.0 * std::f64::consts::PI
+            } else {
+                6.0 * std::f64::consts::PI * (zeta - (zeta * zeta - 1.0).sqrt())
+            };
+            let cycles = ((30.0 / slow).ceil() as usize).clamp(2, 400);
             let got = wind_force(t, &p);
-            assert_close(got, force64(f64::from(t), &p), tol, "wind force");
+            let expected = force64(f64::from(t), &p, cycles);
+            // The f32 time's phase error (6e-8·f·t) times the largest slope of the motion.
+            let slope =
+                4.0 * std::f64::consts::TAU * 3.0 * f64::from(p.frequency) * f64::from(p.strength);
+            let tol = 2e-6 + 1.2e-7 * f64::from(p.frequency * t) / f64::from(p.frequency) * slope;
+            assert_close(got, expected, tol, "wind force");
             assert!(got.abs() <= p.max_bend, "{got} > {}", p.max_bend);
         }
     }
 
     #[test]
-    fn force_sways_both_ways_and_is_continuous() {
-        let p = WindParams {
-            elasticity: 0.5,
-            strength: 0.4,
-            ..WindParams::default()
-        };
-        let samples: Vec<f32> = (0..400).map(|k| wind_force(k as f32 * 0.01, &p)).collect();
-        let (lo, hi) = samples
-            .iter()
-            .fold((f32::MAX, f32::MIN), |(lo, hi), &f| (lo.min(f), hi.max(f)));
-        assert!(lo < 0.0 && hi > 0.0, "sways both ways: [{lo}, {hi}]");
-        for pair in samples.windows(2) {
-            assert!((pair[1] - pair[0]).abs() < 0.05, "continuous: {pair:?}");
+    fn force_is_continuous_with_no_velocity_jump_and_overshoots_after_the_push() {
+        // scenes/wind.toml's gusts, sampled every 0.2 ms over four cycles (8 s).
+        let p = WindParams::default();
+        let dt = 2e-4f64;
+        let x: Vec<f64> = (0..40_000)
+            .map(|k| f64::from(wind_force((k as f64 * dt) as f32, &p)))
+            .collect();
+        let v: Vec<f64> = x.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        let v_max = v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        // Position: no step larger than the fastest motion allows (plus f32 rounding).
+        for (k, w) in x.windows(2).enumerate() {
+            assert!(
+                (w[1] - w[0]).abs() <= v_max * dt * 1.01 + 1e-6,
+                "a jump at t = {}: {w:?}",
+                k as f64 * dt
+            );
         }
-        // Across the cycle wrap (t = 2 s for 0.5 Hz) the force is continuous too.
-        let before = wind_force(f32::from_bits(2.0f32.to_bits() - 1), &p);
-        assert!((before - wind_force(2.0, &p)).abs() < 1e-4);
+        // Velocity: changes by at most the largest acceleration the spring can have (ω²·the
+        // bend range) over a step, cycle starts (t = 2, 4, 6 s) and push drops included. The
+        // old gust cycle jumped from +0.89/s to −2.09/s at each wrap.
+        let omega = std::f64::consts::TAU * 3.0 * 0.5;
+        let a_max = omega * omega * 2.0 * f64::from(p.strength);
+        for (k, w) in v.windows(2).enumerate() {
+            assert!(
+                (w[1] - w[0]).abs() <= a_max * dt + 2.0 * 2e-7 / dt,
+                "velocity jumps at t = {}: {w:?}",
+                k as f64 * dt
+            );
+        }
+        for wrap in [2.0f64, 4.0, 6.0] {
+            let k = (wrap / dt).round() as usize;
+            assert!(
+                (v[k] - v[k - 2]).abs() < 0.05,
+                "velocity across the wrap at {wrap} s: {} → {}",
+                v[k - 2],
+                v[k]
+            );
+        }
+        // The push bends the strand past its steady bend (strength 0.3 → tanh limit 0.5),
+        // and after the push drops (the second half of each cycle) it swings back past rest.
+        let cycle = |from: f64, to: f64| {
+            let (a, b) = ((from / dt) as usize, (to / dt) as usize);
+            x[a..b]
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)))
+        };
+        let (_, peak) = cycle(4.0, 5.0);
+        let (trough, _) = cycle(5.0, 6.0);
+        let steady = 0.5 * (0.3f64 / 0.5).tanh();
+        assert!(
+            peak > steady * 1.1,
+            "rings past the steady bend: {peak} vs {steady}"
+        );
+        assert!(
+            trough < -0.3 * peak,
+            "overshoots rest after the push: {trough} vs {peak}"
+        );
+    }
+
+    #[test]
+    fn force_is_time_addressable_and_steady_without_gusts() {
+        let p = WindParams::default();
+        // The motion repeats every cycle: one time alone gives the frame.
+        for t in [0.1f32, 0.7, 1.3, 1.9] {
+            assert_close(
+                wind_force(t, &p),
+                f64::from(wind_force(t + 4.0, &p)),
+                2e-6,
+                "period",
+            );
+        }
+        let steady = WindParams {
+            frequency: 0.0,
+            ..p
+        };
+        for t in [0.0f32, 1.0, 100.0] {
+            assert_close(
+                wind_force(t, &steady),
+                0.5 * (0.3f64 / 0.5).tanh(),
+                1e-7,
+                "steady wind",
+            );
+        }
+        // Elasticity 0 (the smallest damping) and a very stiff return stay bounded and finite.
+        for elasticity in [0.0f32, 1000.0] {
+            let p = WindParams { elasticity, ..p };
+            for k in 0..200 {
+                let f = wind_force(k as f32 * 0.013, &p);
+                assert!(f.is_finite() && f.abs() <= p.max_bend, "{elasticity}: {f}");
+            }
+        }
     }
 
     #[test]
