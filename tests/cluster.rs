@@ -331,21 +331,28 @@ fn the_kubernetes_manifest_counts_its_shards_once() {
 
 /// A one-node Slurm cluster (munged, slurmctld, slurmd) whose files all lie in one temporary
 /// folder; dropping it cancels its jobs and stops its daemons, in reverse order.
+#[cfg(unix)]
 struct Slurm {
     dir: PathBuf,
     conf: PathBuf,
     daemons: Vec<(&'static str, Child)>,
 }
 
+#[cfg(unix)]
 impl Slurm {
     /// Starts the daemons and waits until the node takes jobs.
     fn start(programs: &SlurmPrograms) -> Slurm {
         // Under /tmp: a Unix socket's path must stay under 108 bytes.
         let dir = std::env::temp_dir().join(format!("pelage-slurm-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
+        // munged refuses folders that others may write to, whatever the umask.
+        use std::os::unix::fs::PermissionsExt;
         for sub in ["state", "spool", "log", "run"] {
             std::fs::create_dir_all(dir.join(sub)).expect("slurm folders");
+            std::fs::set_permissions(dir.join(sub), std::fs::Permissions::from_mode(0o755))
+                .expect("chmod");
         }
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755)).expect("chmod");
         let mut slurm = Slurm {
             conf: dir.join("slurm.conf"),
             dir: dir.clone(),
@@ -359,7 +366,6 @@ impl Slurm {
             .and_then(|mut f| f.read_exact(&mut bytes))
             .expect("random key");
         std::fs::write(&key, &bytes).expect("munge key");
-        use std::os::unix::fs::PermissionsExt;
         std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o400)).expect("chmod");
         let socket = dir.join("run/munge.socket");
         let run = |name: &str| dir.join("run").join(name);
@@ -531,6 +537,7 @@ impl Slurm {
     }
 }
 
+#[cfg(unix)]
 impl Drop for Slurm {
     fn drop(&mut self) {
         if let Some(scancel) = find_program("scancel") {
@@ -561,6 +568,7 @@ impl Drop for Slurm {
 }
 
 /// A TCP port free on this machine now.
+#[cfg(unix)]
 fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
@@ -569,6 +577,7 @@ fn free_port() -> u16 {
 }
 
 /// Where Debian's slurm-wlm and munge put their programs.
+#[cfg(unix)]
 struct SlurmPrograms {
     munged: PathBuf,
     slurmctld: PathBuf,
@@ -576,6 +585,7 @@ struct SlurmPrograms {
     sinfo: PathBuf,
 }
 
+#[cfg(unix)]
 impl SlurmPrograms {
     /// The programs, or what the test needs and lacks.
     fn find() -> Result<Self, String> {
@@ -602,6 +612,7 @@ impl SlurmPrograms {
     }
 }
 
+#[cfg(unix)]
 #[test]
 fn the_slurm_recipe_gives_the_whole_sweep() {
     // docs/cluster/slurm-array.sh on a one-node Slurm: an array of 3 tasks, each `--shard auto`,
