@@ -4,7 +4,7 @@
 # depends on the whole array runs `pelage sweep-merge`. The same results.csv rows, point images,
 # contact sheet and plots as one `pelage sweep` (the timings are each task's own).
 #
-#   docs/cluster/slurm-array.sh N OUT [pelage sweep arguments, without -o and --shard]
+#   docs/cluster/slurm-array.sh N OUT [pelage sweep arguments, without -o, --shard, --threads]
 #   docs/cluster/slurm-array.sh 8 sweep/ scenes/thesis-4-1.toml --param number_of_shells=10,20,30,40
 #
 # Run it where sbatch works (a login node), from a folder every node sees: the shards go to
