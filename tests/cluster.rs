@@ -384,7 +384,7 @@ impl Slurm {
         let cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
         let conf = format!(
             "ClusterName=pelagetest\n\
-             SlurmctldHost=localhost\n\
+             SlurmctldHost=localhost(127.0.0.1)\n\
              SlurmctldPort={ctld_port}\n\
              SlurmdPort={d_port}\n\
              SlurmUser=root\n\
