@@ -8,7 +8,7 @@ use super::staged::{EntryRule, StagedFolder};
 use super::{CommonArgs, Failure, apply_overrides, progress, scene_source, with_threads};
 use clap::Args;
 use pelage::render::PreparedScene;
-use pelage::sweep::{self, ResultRow, Shard, SweepParameter};
+use pelage::sweep::{self, ResultRow, ShardChoice, SweepParameter};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -28,8 +28,11 @@ pub struct SweepArgs {
     /// Frames timed per point (the median is reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub frames: u32,
-    /// Run only shard I of N (1-based): the points whose number is I − 1 modulo N.
-    #[arg(long)]
+    /// Run only shard I of N (1-based): the points whose number is I − 1 modulo N. `auto`
+    /// reads I and N from the job array that started pelage: Slurm (SLURM_ARRAY_TASK_ID,
+    /// _MIN, _COUNT), AWS Batch (AWS_BATCH_JOB_ARRAY_INDEX, _SIZE), or a Kubernetes Indexed Job
+    /// (JOB_COMPLETION_INDEX), which does not tell the count: give it as `auto/N`.
+    #[arg(long, value_name = "I/N|auto|auto/N")]
     pub shard: Option<String>,
     /// Which renderer draws and is timed: the CPU oracle, or wgpu (built with `--features gpu`).
     #[arg(long, value_enum, default_value_t = Backend::Cpu)]
@@ -65,12 +68,25 @@ pub fn run(args: SweepArgs) -> Result<(), Failure> {
         .map(|p| SweepParameter::parse(p))
         .collect::<Result<_, _>>()
         .map_err(bad)?;
-    let shard = args
-        .shard
-        .as_deref()
-        .map(Shard::parse)
-        .transpose()
-        .map_err(bad)?;
+    let shard = match args.shard.as_deref() {
+        None => None,
+        Some(text) => {
+            let env = |name: &str| std::env::var_os(name).map(|v| v.to_string_lossy().into_owned());
+            let (shard, from) = ShardChoice::parse(text)
+                .and_then(|c| c.resolve(&env))
+                .map_err(bad)?;
+            if let Some(from) = from {
+                eprintln!(
+                    "pelage sweep: --shard {text} is shard {}/{} ({}: {})",
+                    shard.index,
+                    shard.count,
+                    from.scheduler.name(),
+                    from.variables
+                );
+            }
+            Some(shard)
+        }
+    };
     let points = sweep::sweep_points(&parameters).map_err(bad)?;
     if args.against_oracle && args.backend != Backend::Gpu {
         return Err(Failure::bad_input(

@@ -9,16 +9,19 @@
 //!
 //! Point numbers do not depend on sharding: shard `I/N` runs the points whose number is
 //! `I − 1` modulo `N`, and the shards' `results.csv` files merge back into the whole sweep
-//! ([`merge_results`]).
+//! ([`merge_results`]). `--shard auto` reads `I/N` from the job scheduler's array task
+//! ([`ShardChoice`], [`shard_from_scheduler`]).
 
 mod csv;
 mod manifest;
 mod plot;
+mod scheduler;
 mod sheet;
 
 pub use csv::{ResultRow, Results, merge_results, parse_results, write_results};
 pub use manifest::{MANIFEST_FILE, Manifest, check_shards, sweep_id};
 pub use plot::{Metric, fps_plot, metric_plot};
+pub use scheduler::{FromScheduler, Scheduler, ShardChoice, shard_from_scheduler};
 pub use sheet::{SheetLayout, contact_sheet};
 
 use crate::scene::Scene;
