@@ -5,7 +5,11 @@
 //!
 //! The adapter is the CPU one (Mesa's lavapipe; `.ci/run` installs it). Without any Vulkan
 //! adapter these tests fail with a message saying what to install. The `_on_gl` tests do the
-//! same through OpenGL ES (wgpu's GL backend, EGL on Mesa's llvmpipe).
+//! same through OpenGL ES (wgpu's GL backend, EGL on Mesa's llvmpipe). The `_on_swiftshader`
+//! tests do it on Google's SwiftShader, a CPU Vulkan driver that shares no code with Mesa's
+//! two, where the Vulkan loader lists it (`VK_ICD_FILENAMES` naming its ICD file beside
+//! lavapipe's; `.ci/swiftshader` installs it); without it they are skipped, unless
+//! `PELAGE_REQUIRE_SWIFTSHADER=1` (CI) makes them fail.
 #![cfg(feature = "gpu")]
 
 mod common;
@@ -40,6 +44,41 @@ fn gl_context() -> GpuContext {
         "GL on llvmpipe blends through the fragment lists"
     );
     context
+}
+
+/// The third implementation: SwiftShader on Vulkan, `None` (skipped, with a line saying why)
+/// where the loader does not list it, unless `PELAGE_REQUIRE_SWIFTSHADER=1`.
+fn swiftshader_context() -> Option<GpuContext> {
+    match GpuContext::open(Api::Vulkan, &AdapterChoice::Name("swiftshader".into())) {
+        Ok(context) => Some(context),
+        Err(e) if std::env::var_os("PELAGE_REQUIRE_SWIFTSHADER").is_some_and(|v| v == "1") => {
+            panic!("PELAGE_REQUIRE_SWIFTSHADER=1: {e}")
+        }
+        Err(e) => {
+            eprintln!(
+                "SKIPPED: {} needs SwiftShader, its ICD file in VK_ICD_FILENAMES (run .ci/setup): {e}",
+                std::thread::current().name().unwrap_or("a test")
+            );
+            None
+        }
+    }
+}
+
+/// The prefix of the images one context writes: none for lavapipe, `gl-`, `swiftshader-`.
+fn prefix(context: &GpuContext) -> &'static str {
+    match context.api() {
+        Api::Gl => "gl-",
+        Api::Vulkan
+            if context
+                .adapter_info()
+                .name
+                .to_lowercase()
+                .contains("swiftshader") =>
+        {
+            "swiftshader-"
+        }
+        Api::Vulkan => "",
+    }
 }
 
 fn scenes() -> Vec<PathBuf> {
@@ -184,6 +223,15 @@ fn every_scene_matches_the_oracle_within_tolerance_on_gl() {
     every_scene(&gl_context(), "gl-", TOLERANCE);
 }
 
+/// The same scenes, instants and tolerance on SwiftShader (Vulkan): the third implementation,
+/// whose code generator (Subzero or LLVM, its own rasterizer and sampler) is not Mesa's gallivm.
+#[test]
+fn every_scene_matches_the_oracle_within_tolerance_on_swiftshader() {
+    if let Some(context) = swiftshader_context() {
+        every_scene(&context, "swiftshader-", TOLERANCE);
+    }
+}
+
 /// Every scene against the oracle; `prefix` starts the names of the images written.
 fn every_scene(context: &GpuContext, prefix: &str, tolerance: &str) {
     let info = context.adapter_info();
@@ -306,10 +354,7 @@ fn check_caught_on(
     options: GpuOptions,
     what: &str,
 ) {
-    let prefix = match context.api() {
-        Api::Vulkan => "",
-        Api::Gl => "gl-",
-    };
+    let prefix = prefix(context);
     let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
     let (scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(scene_file));
     let prepared = PreparedScene::new(&scene).expect("prepare");
@@ -416,7 +461,18 @@ fn a_tangent_not_bent_by_the_lean_is_caught() {
 /// The five changes above are caught through OpenGL too, at the same tier.
 #[test]
 fn the_five_changes_are_caught_on_gl() {
-    let context = gl_context();
+    the_five_changes_are_caught_on(&gl_context());
+}
+
+/// The five changes above are caught on SwiftShader too, at the same tier.
+#[test]
+fn the_five_changes_are_caught_on_swiftshader() {
+    if let Some(context) = swiftshader_context() {
+        the_five_changes_are_caught_on(&context);
+    }
+}
+
+fn the_five_changes_are_caught_on(context: &GpuContext) {
     let cases = [
         (
             "scenes/torus.toml",
@@ -455,7 +511,7 @@ fn the_five_changes_are_caught_on_gl() {
         ),
     ];
     for (scene, time, from, to, what) in cases {
-        check_caught_on(&context, scene, time, perturbed(from, to), what);
+        check_caught_on(context, scene, time, perturbed(from, to), what);
     }
 }
 
