@@ -181,13 +181,24 @@ const SWIFTSHADER_HINT: &str = "; SwiftShader is found through the Vulkan loader
      VK_ICD_FILENAMES at its vk_swiftshader_icd.json (.ci/swiftshader installs it under \
      target/swiftshader/)";
 
-/// Whether `api` offers more than one CPU adapter (lavapipe and SwiftShader both listed).
-fn several_cpu_adapters(instance: &wgpu::Instance, api: Api) -> bool {
-    pollster::block_on(instance.enumerate_adapters(api.backends()))
+/// Mesa's CPU adapter (lavapipe, "llvmpipe" in its name) where `api` lists several CPU
+/// adapters (lavapipe and SwiftShader, `VK_ICD_FILENAMES` naming both): the default stays the
+/// one whose figures the book gives, where wgpu's own fallback choice would take the first one
+/// listed. `None` where there is one CPU adapter or none.
+fn mesa_among_cpu_adapters(instance: &wgpu::Instance, api: Api) -> Option<wgpu::Adapter> {
+    let mut cpu: Vec<wgpu::Adapter> =
+        pollster::block_on(instance.enumerate_adapters(api.backends()))
+            .into_iter()
+            .filter(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
+            .collect();
+    if cpu.len() < 2 {
+        return None;
+    }
+    let index = cpu
         .iter()
-        .filter(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
-        .count()
-        > 1
+        .position(|a| a.get_info().name.to_lowercase().contains("llvmpipe"))
+        .unwrap_or(0);
+    Some(cpu.swap_remove(index))
 }
 
 /// Options of a GPU render.
@@ -256,33 +267,23 @@ impl GpuContext {
             Api::Gl => GpuError::NoGlAdapter(e),
         };
         let adapter = match choice {
-            // Where the loader offers several CPU adapters (lavapipe and SwiftShader, with
-            // `VK_ICD_FILENAMES` naming both), the default stays Mesa's, whose figures the book
-            // gives; wgpu's own fallback choice would take the first one listed.
-            AdapterChoice::Software if several_cpu_adapters(&instance, api) => {
-                let mut all = pollster::block_on(instance.enumerate_adapters(api.backends()));
-                let index = all
-                    .iter()
-                    .position(|a| {
-                        let info = a.get_info();
-                        info.device_type == wgpu::DeviceType::Cpu
-                            && info.name.to_lowercase().contains("llvmpipe")
-                    })
-                    .or_else(|| {
-                        all.iter()
-                            .position(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
-                    })
-                    .expect("a CPU adapter");
-                all.swap_remove(index)
-            }
             AdapterChoice::Software | AdapterChoice::Any => {
-                pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-                    power_preference: wgpu::PowerPreference::HighPerformance,
-                    force_fallback_adapter: *choice == AdapterChoice::Software,
-                    compatible_surface: None,
-                    ..Default::default()
-                }))
-                .map_err(|e| missing(e.to_string()))?
+                let mesa = match choice {
+                    AdapterChoice::Software => mesa_among_cpu_adapters(&instance, api),
+                    _ => None,
+                };
+                match mesa {
+                    Some(adapter) => adapter,
+                    None => {
+                        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                            power_preference: wgpu::PowerPreference::HighPerformance,
+                            force_fallback_adapter: *choice == AdapterChoice::Software,
+                            compatible_surface: None,
+                            ..Default::default()
+                        }))
+                        .map_err(|e| missing(e.to_string()))?
+                    }
+                }
             }
             AdapterChoice::Index(_) | AdapterChoice::Name(_) => {
                 let mut all = pollster::block_on(instance.enumerate_adapters(api.backends()));
