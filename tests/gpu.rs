@@ -5,7 +5,11 @@
 //!
 //! The adapter is the CPU one (Mesa's lavapipe; `.ci/run` installs it). Without any Vulkan
 //! adapter these tests fail with a message saying what to install. The `_on_gl` tests do the
-//! same through OpenGL ES (wgpu's GL backend, EGL on Mesa's llvmpipe).
+//! same through OpenGL ES (wgpu's GL backend, EGL on Mesa's llvmpipe). The `_on_swiftshader`
+//! tests do it on Google's SwiftShader, a CPU Vulkan driver that shares no code with Mesa's
+//! two, where the Vulkan loader lists it (`VK_ICD_FILENAMES` naming its ICD file beside
+//! lavapipe's; `.ci/swiftshader` installs it); without it they are skipped, unless
+//! `PELAGE_REQUIRE_SWIFTSHADER=1` (CI) makes them fail.
 #![cfg(feature = "gpu")]
 
 mod common;
@@ -40,6 +44,41 @@ fn gl_context() -> GpuContext {
         "GL on llvmpipe blends through the fragment lists"
     );
     context
+}
+
+/// The third implementation: SwiftShader on Vulkan, `None` (skipped, with a line saying why)
+/// where the loader does not list it, unless `PELAGE_REQUIRE_SWIFTSHADER=1`.
+fn swiftshader_context() -> Option<GpuContext> {
+    match GpuContext::open(Api::Vulkan, &AdapterChoice::Name("swiftshader".into())) {
+        Ok(context) => Some(context),
+        Err(e) if std::env::var_os("PELAGE_REQUIRE_SWIFTSHADER").is_some_and(|v| v == "1") => {
+            panic!("PELAGE_REQUIRE_SWIFTSHADER=1: {e}")
+        }
+        Err(e) => {
+            eprintln!(
+                "SKIPPED: {} needs SwiftShader, its ICD file in VK_ICD_FILENAMES (run .ci/setup): {e}",
+                std::thread::current().name().unwrap_or("a test")
+            );
+            None
+        }
+    }
+}
+
+/// The prefix of the images one context writes: none for lavapipe, `gl-`, `swiftshader-`.
+fn prefix(context: &GpuContext) -> &'static str {
+    match context.api() {
+        Api::Gl => "gl-",
+        Api::Vulkan
+            if context
+                .adapter_info()
+                .name
+                .to_lowercase()
+                .contains("swiftshader") =>
+        {
+            "swiftshader-"
+        }
+        Api::Vulkan => "",
+    }
 }
 
 fn scenes() -> Vec<PathBuf> {
@@ -184,6 +223,15 @@ fn every_scene_matches_the_oracle_within_tolerance_on_gl() {
     every_scene(&gl_context(), "gl-", TOLERANCE);
 }
 
+/// The same scenes, instants and tolerance on SwiftShader (Vulkan): the third implementation,
+/// whose code generator (Subzero or LLVM, its own rasterizer and sampler) is not Mesa's gallivm.
+#[test]
+fn every_scene_matches_the_oracle_within_tolerance_on_swiftshader() {
+    if let Some(context) = swiftshader_context() {
+        every_scene(&context, "swiftshader-", TOLERANCE);
+    }
+}
+
 /// Every scene against the oracle; `prefix` starts the names of the images written.
 fn every_scene(context: &GpuContext, prefix: &str, tolerance: &str) {
     let info = context.adapter_info();
@@ -306,10 +354,7 @@ fn check_caught_on(
     options: GpuOptions,
     what: &str,
 ) {
-    let prefix = match context.api() {
-        Api::Vulkan => "",
-        Api::Gl => "gl-",
-    };
+    let prefix = prefix(context);
     let tolerance = Tolerance::parse(TOLERANCE).expect("tolerance");
     let (scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(scene_file));
     let prepared = PreparedScene::new(&scene).expect("prepare");
@@ -416,7 +461,18 @@ fn a_tangent_not_bent_by_the_lean_is_caught() {
 /// The five changes above are caught through OpenGL too, at the same tier.
 #[test]
 fn the_five_changes_are_caught_on_gl() {
-    let context = gl_context();
+    the_five_changes_are_caught_on(&gl_context());
+}
+
+/// The five changes above are caught on SwiftShader too, at the same tier.
+#[test]
+fn the_five_changes_are_caught_on_swiftshader() {
+    if let Some(context) = swiftshader_context() {
+        the_five_changes_are_caught_on(&context);
+    }
+}
+
+fn the_five_changes_are_caught_on(context: &GpuContext) {
     let cases = [
         (
             "scenes/torus.toml",
@@ -455,8 +511,85 @@ fn the_five_changes_are_caught_on_gl() {
         ),
     ];
     for (scene, time, from, to, what) in cases {
-        check_caught_on(&context, scene, time, perturbed(from, to), what);
+        check_caught_on(context, scene, time, perturbed(from, to), what);
     }
+}
+
+/// The shader with every vertex's clip position snapped to 1/16 pixel (4 sub-pixel bits,
+/// rounding to nearest) on a `width`×`height` frame, before the rasterizer snaps it again.
+fn snapped_to_sixteenths(width: u32, height: u32) -> GpuOptions {
+    let mut source = SHADER_SOURCE.to_string();
+    for clip in [
+        "frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0)",
+        "frame.view_proj * vec4<f32>(p, 1.0)",
+        "frame.view_proj * vec4<f32>(v.position, 1.0)",
+    ] {
+        let from = format!("out.clip = {clip};");
+        assert_eq!(source.matches(&from).count(), 1, "{from}");
+        source = source.replace(&from, &format!("out.clip = snap_sixteenths({clip});"));
+    }
+    source.push_str(&format!(
+        "
+fn snap_sixteenths(c: vec4<f32>) -> vec4<f32> {{
+    let size = vec2<f32>({width}.0, {height}.0);
+    let s = round((c.xy / c.w * 0.5 + 0.5) * size * 16.0) / 16.0;
+    return vec4<f32>((s / size * 2.0 - 1.0) * c.w, c.z, c.w);
+}}
+"
+    ));
+    GpuOptions {
+        shader: Some(source),
+        ..GpuOptions::default()
+    }
+}
+
+/// Where SwiftShader differs from the oracle by far more than 8 steps (a few pixels on
+/// silhouettes, up to 79 steps on `lod-flyaway` at 2 s), the cause is its 4 sub-pixel bits
+/// (`subPixelPrecisionBits = 4`; the oracle and lavapipe snap to 8): lavapipe drawing the
+/// vertices snapped to 1/16 pixel in the vertex stage gives SwiftShader's frame to within
+/// 8 steps on every pixel, and SwiftShader's own frame does not change with that snapping.
+#[test]
+fn swiftshader_differs_on_silhouettes_by_its_four_sub_pixel_bits() {
+    let Some(swiftshader) = swiftshader_context() else {
+        return;
+    };
+    let (scene, _) = load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lod-flyaway.toml"));
+    let prepared = PreparedScene::new(&scene).expect("prepare");
+    let t = 2.0;
+    let snapped = snapped_to_sixteenths(scene.image.width, scene.image.height);
+    let oracle = prepared.render_at(t, 64).expect("oracle render");
+    let oracle = image::RgbaImage::from_raw(oracle.width, oracle.height, oracle.rgba8)
+        .expect("oracle image");
+    let draw = |context: &GpuContext, options: &GpuOptions| {
+        context
+            .render(&prepared, t, options)
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let on_swiftshader = draw(&swiftshader, &GpuOptions::default());
+    let lavapipe_snapped = draw(&context(), &snapped);
+    let swiftshader_snapped = draw(&swiftshader, &snapped);
+    let within = |a: &image::RgbaImage, b: &image::RgbaImage, steps: u32, what: &str| {
+        let tolerance = Tolerance::parse(&format!("threshold={steps},over=0")).expect("tolerance");
+        let c = compare_images(a, b, &tolerance).expect("same size");
+        println!("{}", row(what, &c));
+        c.passed()
+    };
+    assert!(
+        !within(&oracle, &on_swiftshader, 8, "oracle/swiftshader"),
+        "SwiftShader no longer differs from the oracle on silhouettes: the book's note is stale"
+    );
+    assert!(within(
+        &lavapipe_snapped,
+        &on_swiftshader,
+        8,
+        "lavapipe 4 bits/swiftshader"
+    ));
+    assert!(within(
+        &swiftshader_snapped,
+        &on_swiftshader,
+        1,
+        "swiftshader 4 bits/itself"
+    ));
 }
 
 /// Through OpenGL the frame is blended by the fragment lists, in draw and primitive order:

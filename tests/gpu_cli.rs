@@ -53,10 +53,11 @@ mod gpu {
         let out = pelage(&["gpu-info"]);
         assert_eq!(out.status.code(), Some(0), "{out:?}");
         let text = String::from_utf8_lossy(&out.stdout);
-        // lavapipe (Vulkan) is installed wherever the GPU tests run.
+        // lavapipe (Vulkan) is installed wherever the GPU tests run (listed first, unless
+        // `VK_ICD_FILENAMES` names SwiftShader before it).
         assert!(
             text.lines()
-                .any(|l| l.starts_with("vulkan 0: ") && l.contains("llvmpipe")),
+                .any(|l| l.starts_with("vulkan ") && l.contains("llvmpipe")),
             "{text}"
         );
         let out = pelage(&["gpu-info", "--api", "vulkan"]);
@@ -183,5 +184,73 @@ mod gpu {
         // The three choices are lavapipe: the same bytes.
         assert_eq!(images[0], images[1]);
         assert_eq!(images[0], images[2]);
+    }
+
+    /// `--adapter swiftshader` picks Google's CPU Vulkan driver where `VK_ICD_FILENAMES` names
+    /// its ICD file (`.ci/swiftshader` installs it under `target/swiftshader/`); with lavapipe's
+    /// named too, `software` (the default) stays lavapipe. Where the loader does not list it,
+    /// the one-line refusal says how to make it. Skipped without SwiftShader unless
+    /// `PELAGE_REQUIRE_SWIFTSHADER=1`.
+    #[test]
+    fn adapter_swiftshader_picks_swiftshader() {
+        let dir = common::scratch("swiftshader");
+        let png = dir.join("x.png");
+        let run = |icds: Option<&str>, adapter: &str| {
+            let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_pelage"));
+            command
+                .args(["render", "--backend", "gpu", "--adapter", adapter, "-o"])
+                .arg(&png)
+                .args(SMALL)
+                .env_remove("VK_DRIVER_FILES")
+                .env_remove("VK_ADD_DRIVER_FILES");
+            match icds {
+                Some(files) => command.env("VK_ICD_FILENAMES", files),
+                None => command.env_remove("VK_ICD_FILENAMES"),
+            };
+            command.output().expect("runs")
+        };
+        let out = run(None, "swiftshader");
+        assert_eq!(out.status.code(), Some(2), "{out:?}");
+        let lines = own_errors(&out);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(
+            lines[0].contains("no Vulkan adapter has this name")
+                && lines[0].contains("VK_ICD_FILENAMES"),
+            "{lines:?}"
+        );
+
+        let icd = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("target/swiftshader/vk_swiftshader_icd.json");
+        if !icd.is_file() {
+            assert!(
+                std::env::var_os("PELAGE_REQUIRE_SWIFTSHADER").is_none_or(|v| v != "1"),
+                "PELAGE_REQUIRE_SWIFTSHADER=1 but no {} (run .ci/setup)",
+                icd.display()
+            );
+            eprintln!(
+                "SKIPPED: {} needs SwiftShader, {} (run .ci/setup)",
+                std::thread::current().name().unwrap_or("a test"),
+                icd.display()
+            );
+            return;
+        }
+        let lavapipe = std::fs::read_dir("/usr/share/vulkan/icd.d")
+            .expect("the Vulkan ICD folder")
+            .map(|e| e.expect("entry").path())
+            .find(|p| p.to_string_lossy().contains("lvp_icd"))
+            .expect("lavapipe's ICD file");
+        let both = format!("{}:{}", lavapipe.display(), icd.display());
+        for (adapter, name) in [
+            ("swiftshader", "SwiftShader Device"),
+            ("software", "llvmpipe"),
+        ] {
+            let out = run(Some(&both), adapter);
+            assert_eq!(out.status.code(), Some(0), "--adapter {adapter}: {out:?}");
+            let lines = own_errors(&out);
+            assert!(
+                lines.len() == 1 && lines[0].starts_with(&format!("gpu: {name}")),
+                "--adapter {adapter}: {lines:?}"
+            );
+        }
     }
 }

@@ -46,7 +46,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "API")]
     pub api: Option<String>,
     /// With --backend gpu: the adapter, by index or part of its name as `pelage gpu-info`
-    /// lists them (default: the software one, lavapipe or llvmpipe, for reproducible figures).
+    /// lists them (default: the software one, lavapipe or llvmpipe, for reproducible figures;
+    /// `swiftshader` where VK_ICD_FILENAMES names SwiftShader's ICD file).
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
 }

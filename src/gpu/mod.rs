@@ -29,6 +29,9 @@
 //! lavapipe, llvmpipe on GL) is preferred, so the comparison is the same on every machine; with
 //! [`AdapterChoice::Any`] the first adapter wgpu's default choice gives (a hardware GPU where
 //! there is one), with [`AdapterChoice::Index`] or [`AdapterChoice::Name`] one of [`adapters`].
+//! Google's SwiftShader, a CPU Vulkan driver that shares no code with Mesa's, is the third
+//! implementation the tests hold to the oracle (`--adapter swiftshader`, where
+//! `VK_ICD_FILENAMES` names its ICD file; `.ci/swiftshader` installs it).
 
 use crate::render::PreparedScene;
 use crate::render::fragment::Spot;
@@ -78,6 +81,7 @@ pub enum GpuError {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub enum AdapterChoice {
     /// The CPU (fallback) adapter, lavapipe (llvmpipe on GL): the same results on every machine.
+    /// Where the loader lists SwiftShader too, still lavapipe.
     #[default]
     Software,
     /// wgpu's default adapter (a hardware GPU where there is one).
@@ -90,7 +94,8 @@ pub enum AdapterChoice {
 
 impl AdapterChoice {
     /// `--adapter`'s value: a number is an index in [`adapters`]' list, `software` and `any`
-    /// the two defaults, anything else part of a name.
+    /// the two defaults, anything else part of a name (`swiftshader`: Google's CPU Vulkan
+    /// driver, "SwiftShader Device (Subzero)", where `VK_ICD_FILENAMES` names its ICD file).
     pub fn parse(text: &str) -> AdapterChoice {
         match text.trim() {
             t if t.eq_ignore_ascii_case("software") => AdapterChoice::Software,
@@ -171,6 +176,31 @@ fn describe(list: &[wgpu::AdapterInfo]) -> String {
         .join(", ")
 }
 
+/// What `--adapter swiftshader` adds when no adapter has that name.
+const SWIFTSHADER_HINT: &str = "; SwiftShader is found through the Vulkan loader: point \
+     VK_ICD_FILENAMES at its vk_swiftshader_icd.json (.ci/swiftshader installs it under \
+     target/swiftshader/)";
+
+/// Mesa's CPU adapter (lavapipe, "llvmpipe" in its name) where `api` lists several CPU
+/// adapters (lavapipe and SwiftShader, `VK_ICD_FILENAMES` naming both): the default stays the
+/// one whose figures the book gives, where wgpu's own fallback choice would take the first one
+/// listed. `None` where there is one CPU adapter or none.
+fn mesa_among_cpu_adapters(instance: &wgpu::Instance, api: Api) -> Option<wgpu::Adapter> {
+    let mut cpu: Vec<wgpu::Adapter> =
+        pollster::block_on(instance.enumerate_adapters(api.backends()))
+            .into_iter()
+            .filter(|a| a.get_info().device_type == wgpu::DeviceType::Cpu)
+            .collect();
+    if cpu.len() < 2 {
+        return None;
+    }
+    let index = cpu
+        .iter()
+        .position(|a| a.get_info().name.to_lowercase().contains("llvmpipe"))
+        .unwrap_or(0);
+    Some(cpu.swap_remove(index))
+}
+
 /// Options of a GPU render.
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
@@ -238,13 +268,22 @@ impl GpuContext {
         };
         let adapter = match choice {
             AdapterChoice::Software | AdapterChoice::Any => {
-                pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-                    power_preference: wgpu::PowerPreference::HighPerformance,
-                    force_fallback_adapter: *choice == AdapterChoice::Software,
-                    compatible_surface: None,
-                    ..Default::default()
-                }))
-                .map_err(|e| missing(e.to_string()))?
+                let mesa = match choice {
+                    AdapterChoice::Software => mesa_among_cpu_adapters(&instance, api),
+                    _ => None,
+                };
+                match mesa {
+                    Some(adapter) => adapter,
+                    None => {
+                        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                            power_preference: wgpu::PowerPreference::HighPerformance,
+                            force_fallback_adapter: *choice == AdapterChoice::Software,
+                            compatible_surface: None,
+                            ..Default::default()
+                        }))
+                        .map_err(|e| missing(e.to_string()))?
+                    }
+                }
             }
             AdapterChoice::Index(_) | AdapterChoice::Name(_) => {
                 let mut all = pollster::block_on(instance.enumerate_adapters(api.backends()));
@@ -270,9 +309,14 @@ impl GpuContext {
                             [i] => i,
                             [] => {
                                 return Err(GpuError::Choice(format!(
-                                    "--adapter {name:?}: no {} adapter has this name (have {})",
+                                    "--adapter {name:?}: no {} adapter has this name (have {}){}",
                                     api.name(),
-                                    describe(&infos)
+                                    describe(&infos),
+                                    if wanted == "swiftshader" && api == Api::Vulkan {
+                                        SWIFTSHADER_HINT
+                                    } else {
+                                        ""
+                                    }
                                 )));
                             }
                             _ => {
