@@ -20,6 +20,7 @@ use super::varyings::Varyings;
 use crate::simd::{self, Kernel, SimdLevel};
 use glam::Vec4;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A submitted draw with its closures erased, as the tile loop sees it.
 trait TileDraw: Send + Sync {
@@ -177,6 +178,8 @@ pub struct Frame<'fb, 'a> {
     pending_entries: usize,
     stats: RasterStats,
     simd: SimdLevel,
+    /// Once set, tiles not yet rasterized are skipped (see [`Frame::set_cancel`]).
+    cancel: Option<&'a AtomicBool>,
 }
 
 impl<'fb, 'a> Frame<'fb, 'a> {
@@ -189,7 +192,21 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             pending_entries: 0,
             stats: RasterStats::default(),
             simd: SimdLevel::active(),
+            cancel: None,
         }
+    }
+
+    /// Lets another thread stop this frame early: once `cancel` is set, every tile-draw not
+    /// yet begun is skipped, so the framebuffer is left unfinished (the caller must discard
+    /// it, see [`Frame::cancelled`]). While it stays clear, nothing changes: the flag is read,
+    /// never written, and the image is the same bytes.
+    pub fn set_cancel(&mut self, cancel: &'a AtomicBool) {
+        self.cancel = Some(cancel);
+    }
+
+    /// Whether the flag of [`Frame::set_cancel`] was set: the framebuffer is then unfinished.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
     /// Runs the rasterization of this frame at `level`, capped by what the CPU has
@@ -351,6 +368,7 @@ impl<'fb, 'a> Frame<'fb, 'a> {
         }
         let draws = &self.pending;
         let level = self.simd;
+        let cancel = self.cancel;
         let per_tile: Vec<RasterStats> = self
             .framebuffer
             .tiles_mut()
@@ -359,6 +377,9 @@ impl<'fb, 'a> Frame<'fb, 'a> {
             .map(|(i, target)| {
                 let mut stats = RasterStats::default();
                 for draw in draws {
+                    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                        break;
+                    }
                     draw.rasterize_tile(i, target, &mut stats, level);
                 }
                 stats

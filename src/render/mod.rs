@@ -30,6 +30,7 @@ use fragment::{
 };
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What can go wrong preparing or drawing a scene.
 #[derive(Debug, thiserror::Error)]
@@ -54,6 +55,9 @@ pub enum RenderError {
         /// Why.
         message: String,
     },
+    /// The caller's cancel flag was set while drawing ([`PreparedScene::render_framebuffer_at`]).
+    #[error("the render was cancelled")]
+    Cancelled,
 }
 
 /// The most stripe periods across the object an axis stripe may have: past this, a band's
@@ -86,7 +90,7 @@ fn check_stripes(scene: &Scene, radius: f32) -> Result<(), RenderError> {
 impl RenderError {
     /// Whether the error comes from the user's input (exit status 2) rather than the machine.
     pub fn is_bad_input(&self) -> bool {
-        true
+        !matches!(self, RenderError::Cancelled)
     }
 }
 
@@ -819,9 +823,38 @@ impl PreparedScene {
     ) -> Result<(RenderedImage, Vec<Vec4>), RenderError> {
         let level = SimdLevel::active();
         let (fb, stats) =
-            self.draw_framebuffer(&self.scene, time, tile_size, stage_at(level), level)?;
+            self.draw_framebuffer(&self.scene, time, tile_size, stage_at(level), level, None)?;
         let linear = fb.to_rgba_f32();
         Ok((self.finish_image(&fb, stats), linear))
+    }
+
+    /// The framebuffer [`Self::render_at`] and [`Self::render_linear_at`] round (the same
+    /// draw, at the same [`SimdLevel::active`]), for callers that take its bytes
+    /// ([`Framebuffer::to_rgba8`]) or its floats ([`Framebuffer::to_rgba_f32`]) themselves,
+    /// such as the Python package. Another thread may set `cancel` to stop the frame early:
+    /// the tiles not yet drawn are skipped and [`RenderError::Cancelled`] is returned. While
+    /// `cancel` stays clear the bytes are those of [`Self::render_at`].
+    pub fn render_framebuffer_at(
+        &self,
+        time: f32,
+        tile_size: u32,
+        cancel: &AtomicBool,
+    ) -> Result<(Framebuffer, RasterStats), RenderError> {
+        let level = SimdLevel::active();
+        self.draw_framebuffer(
+            &self.scene,
+            time,
+            tile_size,
+            stage_at(level),
+            level,
+            Some(cancel),
+        )
+    }
+
+    /// Non-fatal problems met while preparing (e.g. an OBJ without UVs), as
+    /// [`RenderedImage::warnings`] carries them.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// One frame of `s`, whose seed, mesh and fur are those of the bake (see [`Self::render_with`]).
@@ -833,7 +866,7 @@ impl PreparedScene {
         stage: FragmentStage,
         level: SimdLevel,
     ) -> Result<RenderedImage, RenderError> {
-        let (fb, stats) = self.draw_framebuffer(s, time, tile_size, stage, level)?;
+        let (fb, stats) = self.draw_framebuffer(s, time, tile_size, stage, level, None)?;
         Ok(self.finish_image(&fb, stats))
     }
 
@@ -848,7 +881,8 @@ impl PreparedScene {
         }
     }
 
-    /// [`Self::draw`]'s framebuffer, before rounding, and its counters.
+    /// [`Self::draw`]'s framebuffer, before rounding, and its counters; `cancel`, when given,
+    /// stops the frame early once set ([`RenderError::Cancelled`]).
     fn draw_framebuffer(
         &self,
         s: &Scene,
@@ -856,7 +890,9 @@ impl PreparedScene {
         tile_size: u32,
         stage: FragmentStage,
         level: SimdLevel,
+        cancel: Option<&AtomicBool>,
     ) -> Result<(Framebuffer, RasterStats), RenderError> {
+        let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
         let (width, height) = (s.image.width, s.image.height);
         let mut fb = Framebuffer::new(width, height, tile_size, s.image.background.extend(1.0))?;
         let camera = Camera {
@@ -892,6 +928,9 @@ impl PreparedScene {
         let lod = self.level_of_detail(s, body, moved.unwrap_or(Vec3::ZERO));
         let mut frame = Frame::new(&mut fb);
         frame.set_simd_level(level);
+        if let Some(cancel) = cancel {
+            frame.set_cancel(cancel);
+        }
 
         // The skin: opaque, writes depth; charred where the fur burns.
         let skin_colour = s.fur.colour * 0.35;
@@ -981,6 +1020,9 @@ impl PreparedScene {
         let difference = s.fur.fur_length();
         let eye = camera.eye;
         for (i, textures) in self.shells.iter().enumerate() {
+            if cancelled() {
+                return Err(RenderError::Cancelled);
+            }
             let lod_span = lod.as_ref().map_or(1.0, |l| l.spans[i]);
             if lod_span <= 0.0 {
                 continue;
@@ -1074,6 +1116,9 @@ impl PreparedScene {
         }
 
         let stats = frame.finish();
+        if cancelled() {
+            return Err(RenderError::Cancelled);
+        }
         Ok((fb, stats))
     }
 
@@ -1480,5 +1525,40 @@ impl PreparedScene {
             stage_at(SimdLevel::active()),
             SimdLevel::active(),
         )
+    }
+}
+
+#[cfg(test)]
+mod cancel_tests {
+    use super::*;
+
+    fn small_scene() -> Scene {
+        let text = "[image]\nwidth = 48\nheight = 32\n[mesh]\nkind = \"sphere\"\n\
+                    [camera]\neye = [0.0, 1.0, 4.0]\n\
+                    [fur]\nnumber_of_strands = 100\nnumber_of_shells = 4\ntexture_resolution = 16\n";
+        Scene::parse(text, "<test>", std::path::Path::new(".")).expect("scene")
+    }
+
+    #[test]
+    fn a_clear_cancel_flag_changes_no_byte() {
+        let prepared = PreparedScene::new(&small_scene()).expect("prepared");
+        let flag = AtomicBool::new(false);
+        for tile in [2, 16, 64] {
+            let (fb, _) = prepared
+                .render_framebuffer_at(0.0, tile, &flag)
+                .expect("render");
+            let (image, linear) = prepared.render_linear_at(0.0, tile).expect("render");
+            assert_eq!(fb.to_rgba8(), image.rgba8);
+            assert_eq!(fb.to_rgba_f32(), linear);
+        }
+    }
+
+    #[test]
+    fn a_set_cancel_flag_stops_the_render() {
+        let prepared = PreparedScene::new(&small_scene()).expect("prepared");
+        let flag = AtomicBool::new(true);
+        let result = prepared.render_framebuffer_at(0.0, 16, &flag);
+        assert!(matches!(result, Err(RenderError::Cancelled)));
+        assert!(!RenderError::Cancelled.is_bad_input());
     }
 }
