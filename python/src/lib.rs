@@ -221,33 +221,17 @@ fn rayon_threads() -> usize {
 }
 
 /// A failure of preparing or drawing the scene named `name`, worded as `pelage render` words
-/// it (the mesh's own errors name their file; the others are prefixed by the scene's name).
+/// it ([`pelage::render::RenderError::describe`]).
 fn render_failure(
     py: Python<'_>,
     e: pelage::render::RenderError,
     scene: &pelage::scene::Scene,
     name: &str,
 ) -> PyErr {
-    use pelage::fur::FurError;
-    use pelage::render::RenderError;
-    let message = match &e {
-        RenderError::Cancelled => {
-            return pyo3::exceptions::PyKeyboardInterrupt::new_err("render cancelled");
-        }
-        RenderError::Mesh(_) => e.to_string(),
-        RenderError::Fur(FurError::InvalidParameter {
-            name: "max_height" | "min_height",
-            ..
-        }) => format!(
-            "{name}: fur.model_difference = {} is out of proportion to the mesh: strands must \
-             be at most {} fur tiles long (a tile is the mesh's uv extent / \
-             fur.texture_repeat), and not vanishingly short; change mesh.scale, \
-             fur.texture_repeat or fur.model_difference",
-            scene.fur.model_difference,
-            pelage::fur::MAX_LENGTH
-        ),
-        _ => format!("{name}: {e}"),
-    };
+    if let pelage::render::RenderError::Cancelled = e {
+        return pyo3::exceptions::PyKeyboardInterrupt::new_err("render cancelled");
+    }
+    let message = e.describe(scene, name);
     error_with_location(py, message.clone(), name, None, &message)
 }
 

@@ -139,39 +139,12 @@ pub fn scene_name(args: &CommonArgs) -> String {
     }
 }
 
-/// A failure of preparing or drawing `scene`, named after the scene file when the error does
-/// not name a file of its own (mesh errors name the OBJ file).
+/// A failure of preparing or drawing `scene`, worded by [`RenderError::describe`] (the Python
+/// package words it the same way).
 pub fn render_failure(e: RenderError, scene: &Scene, name: &str) -> Failure {
-    use pelage::fur::FurError;
-    let status = if e.is_bad_input() { 2 } else { 1 };
-    let message = match &e {
-        RenderError::Mesh(_) => e.to_string(),
-        RenderError::Fur(FurError::InvalidParameter {
-            name: "max_height" | "min_height",
-            ..
-        }) => format!(
-            "{name}: fur.model_difference = {} is out of proportion to the mesh: strands must \
-             be at most {} fur tiles long (a tile is the mesh's uv extent / \
-             fur.texture_repeat), and not vanishingly short; change mesh.scale, \
-             fur.texture_repeat or fur.model_difference",
-            scene.fur.model_difference,
-            pelage::fur::MAX_LENGTH
-        ),
-        RenderError::Map(pelage::render::maps::MapError { key, .. })
-        | RenderError::Scene { key, .. } => format!("{}: {e}", with_line(name, key)),
-        _ => format!("{name}: {e}"),
-    };
-    Failure { message, status }
-}
-
-/// `name:line` when `name` is a scene file that writes `key` (errors found after parsing, such
-/// as a map that cannot be read, name the line of the key at fault); `name` otherwise.
-fn with_line(name: &str, key: &str) -> String {
-    let text =
-        pelage::input::read_text(Path::new(name), pelage::scene::MAX_SCENE_BYTES, "scene").ok();
-    match text.and_then(|t| pelage::scene::line_of_key(&t, key)) {
-        Some(line) => format!("{name}:{line}"),
-        None => name.to_string(),
+    Failure {
+        message: e.describe(scene, name),
+        status: if e.is_bad_input() { 2 } else { 1 },
     }
 }
 

@@ -92,6 +92,47 @@ impl RenderError {
     pub fn is_bad_input(&self) -> bool {
         !matches!(self, RenderError::Cancelled)
     }
+
+    /// The message `pelage render` (and the Python package) gives for this error when drawing
+    /// `scene`, read from the file `name` (or the embedded scene's name): mesh errors name their
+    /// own file; a map or scene value at fault names the scene's line that writes its key; a
+    /// fur length out of proportion to the mesh says which keys to change; the rest are
+    /// prefixed by `name`.
+    pub fn describe(&self, scene: &Scene, name: &str) -> String {
+        match self {
+            RenderError::Mesh(_) => self.to_string(),
+            RenderError::Fur(fur::FurError::InvalidParameter {
+                name: "max_height" | "min_height",
+                ..
+            }) => format!(
+                "{name}: fur.model_difference = {} is out of proportion to the mesh: strands \
+                 must be at most {} fur tiles long (a tile is the mesh's uv extent / \
+                 fur.texture_repeat), and not vanishingly short; change mesh.scale, \
+                 fur.texture_repeat or fur.model_difference",
+                scene.fur.model_difference,
+                fur::MAX_LENGTH
+            ),
+            RenderError::Map(maps::MapError { key, .. }) | RenderError::Scene { key, .. } => {
+                format!("{}: {self}", with_line(name, key))
+            }
+            _ => format!("{name}: {self}"),
+        }
+    }
+}
+
+/// `name:line` when `name` is a scene file that writes `key` (errors found after parsing, such
+/// as a map that cannot be read, name the line of the key at fault); `name` otherwise.
+fn with_line(name: &str, key: &str) -> String {
+    let text = crate::input::read_text(
+        std::path::Path::new(name),
+        crate::scene::MAX_SCENE_BYTES,
+        "scene",
+    )
+    .ok();
+    match text.and_then(|t| crate::scene::line_of_key(&t, key)) {
+        Some(line) => format!("{name}:{line}"),
+        None => name.to_string(),
+    }
 }
 
 /// A shell or fin layer's two textures.
