@@ -287,6 +287,10 @@ fn bench_race_prints_both_backends_and_their_ratio() {
 fn bench_refuses_an_unknown_backend_and_a_gpu_it_lacks() {
     refused(&["bench", "--backend", "vulkan"], "--backend");
     refused(&["bench", "--backend", "gpu", "--race"], "--race");
+    refused(
+        &["bench", "--adapter", "any"],
+        "--adapter chooses the GPU's device: add --backend gpu or --race",
+    );
     if !cfg!(feature = "gpu") {
         refused(&["bench", "--backend", "gpu"], "`gpu` feature");
         refused(&["bench", "--race"], "`gpu` feature");

@@ -28,8 +28,14 @@ const TOLERANCE: &str = pelage::compare::GPU_TOLERANCE;
 /// Longest image side in these tests (the oracle renders the same reduced size).
 const SIDE: u32 = 240;
 
+/// The Vulkan adapter these tests draw on: the software one (lavapipe), unless
+/// `PELAGE_GPU_ADAPTER` names another as `--adapter` does (`any` for a hardware GPU, an index
+/// or part of a name), so the same tests measure a hardware GPU where one is lent.
 fn context() -> GpuContext {
-    GpuContext::new(AdapterChoice::Software).unwrap_or_else(|e| panic!("{e}"))
+    let choice = std::env::var("PELAGE_GPU_ADAPTER")
+        .map(|v| AdapterChoice::parse(&v))
+        .unwrap_or_default();
+    GpuContext::new(choice).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The second API: OpenGL ES through EGL on Mesa's llvmpipe (`.ci/run` installs it).
@@ -64,10 +70,12 @@ fn swiftshader_context() -> Option<GpuContext> {
     }
 }
 
-/// The prefix of the images one context writes: none for lavapipe, `gl-`, `swiftshader-`.
+/// The prefix of the images one context writes: none for lavapipe, `gl-`, `swiftshader-`,
+/// `hw-` for a hardware GPU.
 fn prefix(context: &GpuContext) -> &'static str {
     match context.api() {
         Api::Gl => "gl-",
+        Api::Vulkan if context.adapter_info().device_type != wgpu::DeviceType::Cpu => "hw-",
         Api::Vulkan
             if context
                 .adapter_info()
@@ -214,7 +222,8 @@ fn vertex_stage_skinning_matches_the_cpu_pose() {
 
 #[test]
 fn every_scene_matches_the_oracle_within_tolerance() {
-    every_scene(&context(), "", TOLERANCE);
+    let context = context();
+    every_scene(&context, prefix(&context), TOLERANCE);
 }
 
 /// The same scenes, instants and tolerance through OpenGL (wgpu's GL backend, EGL).

@@ -40,6 +40,11 @@ pub struct BenchArgs {
     /// and print how many times faster or slower the oracle is (feature `gpu`).
     #[arg(long, conflicts_with = "backend")]
     pub race: bool,
+    /// With --backend gpu or --race: the adapter, by index or part of its name as `pelage
+    /// gpu-info` lists them, `any` for wgpu's own choice (a hardware GPU where there is one);
+    /// default the software one (lavapipe).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub adapter: Option<String>,
 }
 
 /// The environment variable llvmpipe and lavapipe read for their rasterizer threads.
@@ -47,6 +52,11 @@ const LP_NUM_THREADS: &str = "LP_NUM_THREADS";
 
 pub fn run(args: BenchArgs) -> Result<(), Failure> {
     let gpu = args.race || args.backend == Backend::Gpu;
+    if args.adapter.is_some() && !gpu {
+        return Err(Failure::bad_input(
+            "--adapter chooses the GPU's device: add --backend gpu or --race",
+        ));
+    }
     if gpu {
         gpu_built(if args.race { "--race" } else { "--backend gpu" })?;
         lavapipe_threads(args.common.threads)?;
@@ -165,7 +175,8 @@ impl Bench<'_> {
     fn gpu(&self) -> Result<(Report, Option<Report>), Failure> {
         use super::gpu_render::gpu_failure;
         use pelage::gpu::{AdapterChoice, GpuContext, GpuOptions};
-        let context = GpuContext::new(AdapterChoice::default()).map_err(gpu_failure)?;
+        let choice = self.args.adapter.as_deref().map(AdapterChoice::parse);
+        let context = GpuContext::new(choice.unwrap_or_default()).map_err(gpu_failure)?;
         let start = Instant::now();
         let frame = context
             .prepare_frame(self.prepared, self.scene.time, &GpuOptions::default())
