@@ -103,7 +103,8 @@ fn texture_pair(c: &mut Criterion) {
     let frac = [0.5f32; 8];
     let mut group = c.benchmark_group("texture_pair");
     group.throughput(Throughput::Elements(POINTS as u64));
-    // At the level the renderer runs (the AVX2 copy where the CPU has it).
+    // At the level the renderer runs (the AVX2 or AVX-512 copy where the CPU has it; 8 lanes,
+    // so not the 16-lane batch's AVX-512 pair path).
     let level = SimdLevel::active();
     for (name, reads) in [("bytes", bytes), ("interleaved", pair)] {
         group.bench_function(BenchmarkId::new(format!("lanes_8_{level}"), name), |b| {
@@ -131,7 +132,7 @@ impl Kernel for PairReads<'_, '_> {
     type Output = f32;
 
     #[inline(always)]
-    fn run(self) -> f32 {
+    fn run<const BATCH: usize>(self) -> f32 {
         let mut sum = 0.0f32;
         for (u, v) in self.points {
             let channels = self.reads.sample_lanes(u, v, self.frac);

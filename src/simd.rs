@@ -4,27 +4,44 @@
 //! The release build targets plain x86-64 (SSE2), so every 4-lane operation of the rasterizer
 //! and the fragment stage is an SSE2 instruction. A [`Kernel`] — the rasterizer's replay of one
 //! draw's triangles over one tile, with the quad traversal and the fragment stage it calls, all
-//! inlined — is compiled once more for x86-64-v3 with `#[target_feature]`, and [`dispatch`]
-//! runs the copy of the [`SimdLevel`] asked for, once per tile and draw, never per fragment.
-//! The body stays ordinary Rust; only the instruction selection differs (VEX encoding,
-//! three-operand forms, `blendv` for selects, BMI shifts).
+//! inlined — is compiled once more for x86-64-v3 and once for x86-64-v4 (AVX-512 F, BW, CD,
+//! DQ, VL) with `#[target_feature]`, and [`dispatch`] runs the copy of the [`SimdLevel`] asked
+//! for, once per tile and draw, never per fragment. The body stays ordinary Rust; only the
+//! instruction selection differs (VEX or EVEX encoding, three-operand forms, `blendv` or mask
+//! registers for selects, BMI shifts) and, at AVX-512, the batch width: the kernel runs with
+//! [`WIDE_LANES`] (16) lanes a batch instead of [`LANES`] (8), one 512-bit register of `f32`
+//! per lane array.
 //!
-//! No AVX-512 copy: one was built (x86-64-v3 plus AVX-512 F, BW, DQ, VL, CD) and gave the same
-//! bytes, but took 24 % *more* CPU time than the baseline on thesis-4-2 (README, "Where the time
-//! goes"), so it was removed. Measured again with the fragment stage's 8-lane batches
-//! (docs/performance.md, "Lit lanes in batches of 8"): the same time as AVX2 with 8 lanes a
-//! batch, 7–10 % more with 16 lanes in 512-bit registers.
+//! The AVX-512 level, and why 16 lanes pay now. An earlier AVX-512 copy took 24 % more CPU than
+//! the baseline with 4-lane quads, then the same as AVX2 with 8-lane batches and 7–10 % more
+//! with 16 (docs/performance.md). Measured and read again for this level: the batches are not
+//! the cause (thesis-4-2 fills them to 15.1 lanes of 16 against 7.7 of 8; 80 % of the lanes
+//! are lit in both). The copy was: at 16 lanes LLVM left `array::from_fn` and `array::map` in
+//! the batch's interpolation out of line, compiled for the baseline (a call and SSE2 code for
+//! each component a batch reads, 315 call sites in the copy), and turned a table lookup of the
+//! shadow's alphas into gathers; both are plain loops and arithmetic now. And the texture
+//! pair's work is per lane (the texel conversion and filter run on a lane's 8 channels, the
+//! results go to channel arrays by scalar stores), which wider batches do not shorten: with
+//! those fixes, 16 portable lanes took the same CPU as AVX2. The 16-lane batch therefore reads
+//! its texture pair with AVX-512 intrinsics (`raster::texture::pairs512`: two lanes a 512-bit
+//! register, the transpose in registers), and the level took 14–15 % less CPU than AVX2 on
+//! thesis-4-2 (Intel Xeon with AVX-512 FP16, docs/performance.md, "The AVX-512 level"); AVX-512
+//! with 8-lane batches took 5 % more. So [`SimdLevel::detected`] picks `avx512` where the CPU
+//! has it.
 //!
 //! Invariant: **every level gives the same bytes.** Every copy runs the same IEEE operations in
 //! the same order: Rust never contracts `a·b + c` into a fused multiply-add (LLVM fuses only on
 //! an explicit `mul_add`, which no fragment code calls: `src/shading/lanes.rs` forbids it, and
 //! the crates below — glam, wide, libm — choose their code paths by compile-time `cfg`, which is
-//! the same baseline in every copy), never reassociates a sum, and approximate reciprocals are
-//! never used. `tests/simd_levels.rs` renders scenes at every level this machine has and compares
-//! the bytes; `.ci/run` reruns the golden tests at the baseline after the run at the best level.
+//! the same baseline in every copy; the AVX-512 texture path's intrinsics are each one correctly
+//! rounded operation, in the scalar order), never reassociates a sum, and approximate
+//! reciprocals are never used. A lane's result never depends on the batch's width.
+//! `tests/simd_levels.rs` renders scenes at every level this machine has and compares the
+//! bytes; `.ci/run` reruns the golden tests at the baseline after the run at the best level,
+//! and at `avx2` too where the CPU has AVX-512.
 //!
 //! The level is the best the CPU has ([`SimdLevel::detected`]), capped by the environment
-//! variable `PELAGE_SIMD` (`scalar`, `sse2`, `avx2`; [`SimdLevel::active`]), or set
+//! variable `PELAGE_SIMD` (`scalar`, `sse2`, `avx2`, `avx512`; [`SimdLevel::active`]), or set
 //! per frame ([`crate::raster::Frame::set_simd_level`]). `scalar` also makes the renderer run the
 //! fur fragment stage's scalar twin (one fragment at a time) instead of the quad stage; the
 //! rasterizer's own quad traversal then runs at the baseline. A cap above what the CPU has runs
@@ -33,8 +50,8 @@
 use std::fmt;
 use std::sync::OnceLock;
 
-/// The environment variable that caps the level: `scalar`, `sse2` (alias `baseline`) or
-/// `avx2`.
+/// The environment variable that caps the level: `scalar`, `sse2` (alias `baseline`), `avx2`
+/// or `avx512`.
 pub const SIMD_ENV: &str = "PELAGE_SIMD";
 
 /// An instruction-set level of the hot path, from the narrowest. Levels are ordered: a cap
@@ -47,11 +64,14 @@ pub enum SimdLevel {
     Sse2,
     /// x86-64-v3: AVX2, FMA (never used for fragment arithmetic), BMI1/2, LZCNT, POPCNT, MOVBE.
     Avx2,
+    /// x86-64-v4: x86-64-v3 plus AVX-512 F, BW, CD, DQ and VL, with [`Kernel::run`]'s batches
+    /// of [`WIDE_LANES`] lanes in 512-bit registers.
+    Avx512,
 }
 
 /// An unknown value of [`SIMD_ENV`].
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{SIMD_ENV}={value:?} is not a SIMD level: expected scalar, sse2 or avx2")]
+#[error("{SIMD_ENV}={value:?} is not a SIMD level: expected scalar, sse2, avx2 or avx512")]
 pub struct SimdLevelError {
     /// The value given.
     pub value: String,
@@ -59,7 +79,12 @@ pub struct SimdLevelError {
 
 impl SimdLevel {
     /// Every level, narrowest first.
-    pub const ALL: [SimdLevel; 3] = [SimdLevel::Scalar, SimdLevel::Sse2, SimdLevel::Avx2];
+    pub const ALL: [SimdLevel; 4] = [
+        SimdLevel::Scalar,
+        SimdLevel::Sse2,
+        SimdLevel::Avx2,
+        SimdLevel::Avx512,
+    ];
 
     /// The name [`SIMD_ENV`] takes.
     pub fn name(self) -> &'static str {
@@ -67,6 +92,7 @@ impl SimdLevel {
             SimdLevel::Scalar => "scalar",
             SimdLevel::Sse2 => "sse2",
             SimdLevel::Avx2 => "avx2",
+            SimdLevel::Avx512 => "avx512",
         }
     }
 
@@ -74,7 +100,9 @@ impl SimdLevel {
     pub fn detected() -> SimdLevel {
         static DETECTED: OnceLock<SimdLevel> = OnceLock::new();
         *DETECTED.get_or_init(|| {
-            if x86::has_avx2() {
+            if x86::has_avx512() {
+                SimdLevel::Avx512
+            } else if x86::has_avx2() {
                 SimdLevel::Avx2
             } else {
                 SimdLevel::Sse2
@@ -133,6 +161,7 @@ impl std::str::FromStr for SimdLevel {
             "scalar" => Ok(SimdLevel::Scalar),
             "sse2" | "baseline" => Ok(SimdLevel::Sse2),
             "avx2" => Ok(SimdLevel::Avx2),
+            "avx512" => Ok(SimdLevel::Avx512),
             _ => Err(SimdLevelError {
                 value: s.to_string(),
             }),
@@ -140,14 +169,23 @@ impl std::str::FromStr for SimdLevel {
     }
 }
 
+/// Lanes of the batches a [`Kernel`] runs below AVX-512: two 4-lane quads, one 256-bit
+/// register of `f32` with AVX2, two 128-bit ones on the baseline.
+pub const LANES: usize = 8;
+
+/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx512`]: four quads, one 512-bit
+/// register of `f32`.
+pub const WIDE_LANES: usize = 16;
+
 /// A piece of hot code compiled once per level: its [`Kernel::run`] must be `#[inline(always)]`,
 /// as must everything hot it calls (or be generic and small enough that LLVM inlines it), so
 /// that the whole body lands in each level's copy. A function left out of line runs the baseline.
 pub trait Kernel {
     /// What the kernel returns.
     type Output;
-    /// The body. Mark it `#[inline(always)]`.
-    fn run(self) -> Self::Output;
+    /// The body, whose batches (where it batches lanes) hold `BATCH` lanes: [`LANES`] or
+    /// [`WIDE_LANES`], as the level's registers suit. Mark it `#[inline(always)]`.
+    fn run<const BATCH: usize>(self) -> Self::Output;
 }
 
 /// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
@@ -156,19 +194,23 @@ pub trait Kernel {
 pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
     {
+        if level >= SimdLevel::Avx512 && x86::has_avx512() {
+            // SAFETY: the features `x86::avx512` enables were detected on this CPU just above.
+            return unsafe { x86::avx512(kernel) };
+        }
         if level >= SimdLevel::Avx2 && x86::has_avx2() {
             // SAFETY: the features `x86::avx2` enables were detected on this CPU just above.
             return unsafe { x86::avx2(kernel) };
         }
     }
     let _ = level;
-    kernel.run()
+    kernel.run::<LANES>()
 }
 
 /// The x86-64 copies and their feature tests (`is_x86_feature_detected!` caches its answer).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::Kernel;
+    use super::{Kernel, LANES, WIDE_LANES};
 
     /// x86-64-v3.
     pub(super) fn has_avx2() -> bool {
@@ -181,9 +223,27 @@ mod x86 {
             && is_x86_feature_detected!("movbe")
     }
 
+    /// x86-64-v4: x86-64-v3 and AVX-512 F, BW, CD, DQ, VL (which the standard library's test
+    /// also checks the operating system saves).
+    pub(super) fn has_avx512() -> bool {
+        has_avx2()
+            && is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512bw")
+            && is_x86_feature_detected!("avx512cd")
+            && is_x86_feature_detected!("avx512dq")
+            && is_x86_feature_detected!("avx512vl")
+    }
+
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
     pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
-        kernel.run()
+        kernel.run::<LANES>()
+    }
+
+    #[target_feature(
+        enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe,avx512f,avx512bw,avx512cd,avx512dq,avx512vl"
+    )]
+    pub(super) fn avx512<K: Kernel>(kernel: K) -> K::Output {
+        kernel.run::<WIDE_LANES>()
     }
 }
 
@@ -191,6 +251,10 @@ mod x86 {
 #[cfg(not(target_arch = "x86_64"))]
 mod x86 {
     pub(super) fn has_avx2() -> bool {
+        false
+    }
+
+    pub(super) fn has_avx512() -> bool {
         false
     }
 }
@@ -204,7 +268,7 @@ mod tests {
     impl Kernel for Sum<'_> {
         type Output = f32;
         #[inline(always)]
-        fn run(self) -> f32 {
+        fn run<const BATCH: usize>(self) -> f32 {
             // A left-to-right sum of products: any contraction or reassociation would show.
             self.0.iter().fold(0.0, |s, &x| s + x * 1.1)
         }
@@ -217,17 +281,39 @@ mod tests {
             assert_eq!(level.to_string().to_uppercase().parse(), Ok(level));
         }
         assert_eq!(" baseline ".parse(), Ok(SimdLevel::Sse2));
-        let e = "avx512".parse::<SimdLevel>().unwrap_err();
-        assert!(e.to_string().contains("\"avx512\""), "{e}");
+        assert_eq!("AVX512".parse(), Ok(SimdLevel::Avx512));
+        let e = "avx1024".parse::<SimdLevel>().unwrap_err();
+        assert!(e.to_string().contains("\"avx1024\""), "{e}");
+        assert!(e.to_string().contains("avx2 or avx512"), "{e}");
     }
 
     #[test]
     fn levels_are_capped_by_the_cpu() {
         let best = SimdLevel::detected();
-        assert_eq!(SimdLevel::Avx2.capped(), best);
+        assert_eq!(SimdLevel::Avx512.capped(), best);
+        assert_eq!(SimdLevel::Avx2.capped(), best.min(SimdLevel::Avx2));
         assert_eq!(SimdLevel::Scalar.capped(), SimdLevel::Scalar);
         assert!(SimdLevel::available().contains(&SimdLevel::Sse2));
         assert_eq!(SimdLevel::available().last(), Some(&best));
+    }
+
+    struct Width;
+
+    impl Kernel for Width {
+        type Output = usize;
+        #[inline(always)]
+        fn run<const BATCH: usize>(self) -> usize {
+            BATCH
+        }
+    }
+
+    #[test]
+    fn batches_hold_16_lanes_at_avx512_only() {
+        for level in SimdLevel::ALL {
+            let wide = level.capped() == SimdLevel::Avx512;
+            let lanes = if wide { WIDE_LANES } else { LANES };
+            assert_eq!(dispatch(level, Width), lanes, "{level}");
+        }
     }
 
     #[test]

@@ -55,11 +55,11 @@ fn busy_colour(texture: &Texture, f: &Fragment<'_, (Vec4, Vec2)>) -> Option<Vec4
 struct Hoarder<'t>(&'t Texture);
 
 impl QuadShader<(Vec4, Vec2)> for Hoarder<'_> {
-    type Deferred = Vec<(PixelSlot, Vec4)>;
+    type Deferred<const BATCH: usize> = Vec<(PixelSlot, Vec4)>;
 
-    fn shade_quad(
+    fn shade_quad<const BATCH: usize>(
         &self,
-        held: &mut Self::Deferred,
+        held: &mut Self::Deferred<BATCH>,
         quad: &Quad<'_, (Vec4, Vec2)>,
         mut slots: QuadSlots,
         _: impl FnMut(PixelSlot, Vec4),
@@ -73,7 +73,11 @@ impl QuadShader<(Vec4, Vec2)> for Hoarder<'_> {
         }
     }
 
-    fn finish(&self, held: &mut Self::Deferred, mut write: impl FnMut(PixelSlot, Vec4)) {
+    fn finish<const BATCH: usize>(
+        &self,
+        held: &mut Self::Deferred<BATCH>,
+        mut write: impl FnMut(PixelSlot, Vec4),
+    ) {
         while let Some((slot, colour)) = held.pop() {
             write(slot, colour);
         }
@@ -219,9 +223,9 @@ fn draw_layers(layers: &[(f32, Vec4)], state: DrawState) -> Framebuffer {
 struct Greedy;
 
 impl QuadShader<Vec4> for Greedy {
-    type Deferred = ();
+    type Deferred<const BATCH: usize> = ();
 
-    fn shade_quad(
+    fn shade_quad<const BATCH: usize>(
         &self,
         _: &mut (),
         quad: &Quad<'_, Vec4>,

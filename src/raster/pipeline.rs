@@ -128,15 +128,15 @@ where
     type Output = ();
 
     #[inline(always)]
-    fn run(self) {
+    fn run<const BATCH: usize>(self) {
         let TileReplay {
             draw,
             tile,
             target,
             stats,
         } = self;
-        let mut deferred = S::Deferred::default();
-        let holds = holds_across_triangles::<V, S>(draw.state.depth_write);
+        let mut deferred = S::Deferred::<BATCH>::default();
+        let holds = holds_across_triangles::<V, S, BATCH>(draw.state.depth_write);
         let mut held = HeldPixels::new(target.rect, holds);
         for chunk in &draw.chunks {
             for &t in &chunk.bins[tile] {

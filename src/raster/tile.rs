@@ -307,16 +307,17 @@ impl QuadSlots {
 /// passed on by value (through `&mut F`'s `FnMut`) can stay out of line: pass it on as
 /// `&mut impl FnMut` (docs/performance.md, "Lit lanes in batches of 8").
 pub trait QuadShader<V>: Send + Sync {
-    /// What the shader keeps between quads (`()` for none). One is made per tile and draw, and
-    /// it is empty again after each [`QuadShader::finish`].
-    type Deferred: Default;
+    /// What the shader keeps between quads (`()` for none), in the hot path's copy whose
+    /// batches hold `BATCH` lanes ([`crate::simd::Kernel::run`]). One is made per tile and
+    /// draw, and it is empty again after each [`QuadShader::finish`].
+    type Deferred<const BATCH: usize>: Default;
 
     /// Shades the lanes of `slots` ([`QuadSlots::lanes`]) and writes the colour of each lane
     /// it keeps to the lane's slot, now or by [`QuadShader::finish`]; a lane never
     /// written is discarded.
-    fn shade_quad(
+    fn shade_quad<const BATCH: usize>(
         &self,
-        deferred: &mut Self::Deferred,
+        deferred: &mut Self::Deferred<BATCH>,
         quad: &Quad<'_, V>,
         slots: QuadSlots,
         write: impl FnMut(PixelSlot, Vec4),
@@ -324,7 +325,11 @@ pub trait QuadShader<V>: Send + Sync {
 
     /// Writes what `deferred` still holds (see the trait's doc for when it is called).
     #[inline(always)]
-    fn finish(&self, deferred: &mut Self::Deferred, write: impl FnMut(PixelSlot, Vec4)) {
+    fn finish<const BATCH: usize>(
+        &self,
+        deferred: &mut Self::Deferred<BATCH>,
+        write: impl FnMut(PixelSlot, Vec4),
+    ) {
         let _ = (deferred, write);
     }
 }
@@ -337,10 +342,10 @@ where
     V: Varyings,
     F: Fn(&Fragment<V>) -> Option<Vec4> + Send + Sync,
 {
-    type Deferred = ();
+    type Deferred<const BATCH: usize> = ();
 
     #[inline(always)]
-    fn shade_quad(
+    fn shade_quad<const BATCH: usize>(
         &self,
         _: &mut (),
         quad: &Quad<'_, V>,
@@ -390,8 +395,10 @@ pub(crate) struct HeldPixels {
 /// anything and the draw does not write depth. Otherwise the rasterizer asks for the lanes at
 /// the end of each triangle and keeps no [`HeldPixels`].
 #[inline(always)]
-pub(crate) fn holds_across_triangles<V, S: QuadShader<V>>(writes_depth: bool) -> bool {
-    size_of::<S::Deferred>() != 0 && !writes_depth
+pub(crate) fn holds_across_triangles<V, S: QuadShader<V>, const BATCH: usize>(
+    writes_depth: bool,
+) -> bool {
+    size_of::<S::Deferred<BATCH>>() != 0 && !writes_depth
 }
 
 impl HeldPixels {
@@ -448,10 +455,10 @@ impl HeldPixels {
 
 /// Ends one draw in one tile: the shader writes what it still holds.
 #[inline(always)]
-pub(crate) fn finish_tile<V, S>(
+pub(crate) fn finish_tile<V, S, const BATCH: usize>(
     state: &DrawState,
     shader: &S,
-    deferred: &mut S::Deferred,
+    deferred: &mut S::Deferred<BATCH>,
     target: &mut TileTarget,
     stats: &mut RasterStats,
 ) where
@@ -481,12 +488,12 @@ pub(crate) fn finish_tile<V, S>(
 /// copy of the tile replay.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the triangle, the draw, and the tile's state and counters
-pub(crate) fn rasterize_triangle<V, S>(
+pub(crate) fn rasterize_triangle<V, S, const BATCH: usize>(
     tri: &SetupTriangle,
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
-    deferred: &mut S::Deferred,
+    deferred: &mut S::Deferred<BATCH>,
     held: &mut HeldPixels,
     target: &mut TileTarget,
     stats: &mut RasterStats,
@@ -497,14 +504,14 @@ pub(crate) fn rasterize_triangle<V, S>(
     use {BlendMode as B, DepthCompare as D};
     match (state.depth_compare, state.blend, state.depth_write) {
         // Blended layers over an opaque base (shells, fins): test, no write.
-        (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, S, LESS_EQUAL, ALPHA, NO>(
+        (D::LessEqual, B::Alpha, false) => rasterize_quads::<V, S, BATCH, LESS_EQUAL, ALPHA, NO>(
             tri, varyings, state, shader, deferred, held, target, stats,
         ),
         // Opaque geometry.
-        (D::Less, B::Replace, true) => rasterize_quads::<V, S, LESS, REPLACE, YES>(
+        (D::Less, B::Replace, true) => rasterize_quads::<V, S, BATCH, LESS, REPLACE, YES>(
             tri, varyings, state, shader, deferred, held, target, stats,
         ),
-        _ => rasterize_quads::<V, S, DYNAMIC, DYNAMIC, DYNAMIC>(
+        _ => rasterize_quads::<V, S, BATCH, DYNAMIC, DYNAMIC, DYNAMIC>(
             tri, varyings, state, shader, deferred, held, target, stats,
         ),
     }
@@ -521,12 +528,12 @@ const YES: u8 = 2;
 
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // as `rasterize_triangle`
-fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
+fn rasterize_quads<V, S, const BATCH: usize, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
     tri: &SetupTriangle,
     varyings: [&V; 3],
     state: &DrawState,
     shader: &S,
-    deferred: &mut S::Deferred,
+    deferred: &mut S::Deferred<BATCH>,
     held: &mut HeldPixels,
     target: &mut TileTarget,
     stats: &mut RasterStats,
@@ -555,7 +562,7 @@ fn rasterize_quads<V, S, const DEPTH: u8, const BLEND: u8, const WRITE: u8>(
         _ => state.depth_write,
     };
     // Without depth writes the shader may hold lanes past this triangle (`HeldPixels`).
-    let tracks = holds_across_triangles::<V, S>(writes_depth);
+    let tracks = holds_across_triangles::<V, S, BATCH>(writes_depth);
     for qy in ((r.y0 & !1)..r.y1).step_by(2) {
         // Lanes 2 and 3 fall off the image when it has an odd number of rows.
         let rows_mask = if qy + 1 < tile.y1 { 0b1111 } else { 0b0011 };

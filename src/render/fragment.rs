@@ -16,10 +16,10 @@
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
 //! it finds each quad's level of detail and mip levels once and hands the quad's shaded lanes
 //! to a [`FurBatch`], which runs every step above on [`BATCH_LANES`] lanes of the tile's quads
-//! at once in structure-of-arrays form (the texture pair's footprints with
-//! [`TrilinearPair::sample_lanes`], the alpha test as a lane mask, [`shading::ShadowLanes`] for
-//! step 6, lookup `k` of every lane in one batch; [`crate::shading::lanes`] for the rest). The
-//! golden tests render every scene with both.
+//! (16 in the AVX-512 copy of the hot path, [`crate::simd`]) at once in structure-of-arrays
+//! form (the texture pair's footprints with [`TrilinearPair::sample_lanes`], the alpha test as
+//! a lane mask, [`shading::ShadowLanes`] for step 6, lookup `k` of every lane in one batch;
+//! [`crate::shading::lanes`] for the rest). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
 use crate::raster::texture::{MipLevel, PairedTexels, TrilinearPair, level_of_detail};
@@ -30,7 +30,7 @@ use crate::scene::{
 };
 use crate::shading::{
     self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
-    Vec3x8, Vec3xN,
+    Vec3xN,
     lanes::{lane_mask, select_bits},
 };
 use glam::{Vec2, Vec3, Vec4};
@@ -651,7 +651,7 @@ pub fn shade_fur(
 /// Shades the lanes of one quad ([`QuadSlots::lanes`]): lane by lane the same bits as
 /// [`shade_fur`]. The quad's level of detail (its coarse derivatives) and the mip levels it
 /// picks are found here, once; its shaded lanes (their slots and interpolation weights) then
-/// join `batch`, which runs the whole stage on [`BATCH_LANES`] lanes at a time ([`FurBatch`]).
+/// join `batch`, which runs the whole stage on `N` lanes at a time ([`FurBatch`]).
 /// Lanes of quads at other mip levels or of another triangle go to a fresh batch: the one held
 /// is run first.
 ///
@@ -659,10 +659,10 @@ pub fn shade_fur(
 /// the rasterizer's tile replay.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the quad, where its lanes go, and the layer's state
-pub fn shade_fur_quad<'a>(
+pub fn shade_fur_quad<'a, const N: usize>(
     quad: &Quad<'_, FurVaryings>,
     mut slots: QuadSlots,
-    batch: &mut FurBatch<'a>,
+    batch: &mut FurBatch<'a, N>,
     textures: LayerMaps<'a>,
     maps: &SurfaceMaps,
     layer: &LayerParams,
@@ -684,7 +684,7 @@ pub fn shade_fur_quad<'a>(
     // runs what the batch holds first. (One call site of the batch's run per copy of the hot
     // path keeps that copy small.)
     let lanes = slots.lanes();
-    let full = batch.len + lanes.count_ones() as usize > BATCH_LANES;
+    let full = batch.len + lanes.count_ones() as usize > N;
     // The triangle, known by its corners' addresses: they stay in place and unchanged while
     // the batch lives (one per tile and draw, [`QuadShader::Deferred`]).
     let triangle = quad.corners().map(|c| std::ptr::from_ref(c) as usize);
@@ -719,7 +719,7 @@ pub fn shade_fur_quad<'a>(
         0.0
     };
     let i = batch.len;
-    if i <= BATCH_LANES - 4
+    if i <= N - 4
         && let Some(whole) = slots.take_whole()
     {
         // The common quad, all four lanes shaded: joins the batch in whole rows.
@@ -753,14 +753,15 @@ pub fn shade_fur_quad<'a>(
     }
 }
 
-/// Lanes in a [`FurBatch`]: two quads' worth, which plain per-lane loops turn into 256-bit
-/// instructions in the AVX2 copy of the hot path.
-pub const BATCH_LANES: usize = 8;
+/// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
+/// plain per-lane loops turn into 256-bit instructions in the AVX2 copy of the hot path; the
+/// AVX-512 copy's batches hold [`crate::simd::WIDE_LANES`].
+pub const BATCH_LANES: usize = crate::simd::LANES;
 
 /// Shaded fragments of a draw's quads in one tile waiting for the whole fur stage, which runs
-/// on [`BATCH_LANES`] lanes at once in structure-of-arrays form: the texture pair's footprints,
-/// texel conversion and filter ([`TrilinearPair::sample_lanes`]), the alpha test as a lane
-/// mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
+/// on `N` lanes at once ([`BATCH_LANES`], or [`crate::simd::WIDE_LANES`] in the AVX-512 copy)
+/// in structure-of-arrays form: the texture pair's footprints, texel conversion and filter
+/// ([`TrilinearPair::sample_lanes`]), the alpha test as a lane mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
 /// in one triangle, whose varyings it interpolates a component of all lanes at a time
 /// (`BatchVaryings`), and read one pair of mip levels and one shadow level (each keeps its
@@ -771,8 +772,7 @@ pub const BATCH_LANES: usize = 8;
 /// Lane by lane the same bits as [`shade_fur`]: every step is the scalar twin's operations on
 /// each lane, and a lane's result depends on nothing else in the batch. Lanes discarded on the
 /// way run on with the others, their results dropped: the batch runs full without compaction.
-#[derive(Default)]
-pub struct FurBatch<'a> {
+pub struct FurBatch<'a, const N: usize> {
     len: usize,
     /// The lower mip level index of `pair` (`None` before the first quad).
     pair_lower: Option<usize>,
@@ -783,13 +783,30 @@ pub struct FurBatch<'a> {
     shadow_level: Option<&'a MipLevel>,
     /// The index of `shadow_level` in the colour map's chain.
     shadow_index: usize,
-    slots: [Option<PixelSlot>; BATCH_LANES],
+    slots: [Option<PixelSlot>; N],
     /// The lanes' triangle and weights, interpolated a component at a time when read.
-    varyings: BatchVaryings,
+    varyings: BatchVaryings<N>,
     /// Each lane's level of detail (its quad's), read where a lane is sampled alone.
-    lod: [f32; BATCH_LANES],
+    lod: [f32; N],
     /// Each lane's blend fraction between the pair's levels.
-    frac: [f32; BATCH_LANES],
+    frac: [f32; N],
+}
+
+impl<const N: usize> Default for FurBatch<'_, N> {
+    /// Empty.
+    fn default() -> Self {
+        FurBatch {
+            len: 0,
+            pair_lower: None,
+            pair: None,
+            shadow_level: None,
+            shadow_index: 0,
+            slots: [const { None }; N],
+            varyings: BatchVaryings::default(),
+            lod: [0.0; N],
+            frac: [0.0; N],
+        }
+    }
 }
 
 /// The varyings of a [`FurBatch`]'s lanes: their triangle's corners and each lane's weights.
@@ -797,34 +814,51 @@ pub struct FurBatch<'a> {
 /// component, broadcast, under the lanes' weights: per-lane arrays straight away, the
 /// component by component `(a·wa + b·wb) + c·wc` of [`Quad::field`], and only the
 /// components a batch reads.
-#[derive(Default)]
-struct BatchVaryings {
+struct BatchVaryings<const N: usize> {
     /// The addresses of the triangle's corners (zeros before the first).
     triangle: [usize; 3],
     /// The corners' varyings as `f32` components.
     corners: [[f32; FUR_VARYING_FLOATS]; 3],
     /// `weights[k][i]`: lane `i`'s weight of corner `k`.
-    weights: [[f32; BATCH_LANES]; 3],
+    weights: [[f32; N]; 3],
 }
 
-impl BatchVaryings {
+impl<const N: usize> Default for BatchVaryings<N> {
+    /// No triangle, zeros.
+    fn default() -> Self {
+        BatchVaryings {
+            triangle: [0; 3],
+            corners: [[0.0; FUR_VARYING_FLOATS]; 3],
+            weights: [[0.0; N]; 3],
+        }
+    }
+}
+
+impl<const N: usize> BatchVaryings<N> {
     /// Component `c` ([`FurVaryings`] as `f32`s) of every lane.
     #[inline(always)]
-    fn component(&self, c: usize) -> [f32; BATCH_LANES] {
-        let [a, b, d] = [0, 1, 2].map(|k| self.corners[k][c]);
+    #[allow(clippy::needless_range_loop)] // lanes as an indexed loop: the form LLVM packs
+    fn component(&self, c: usize) -> [f32; N] {
+        // A plain loop, not `array::map` or `array::from_fn`: at 16 lanes LLVM left those out
+        // of line, compiled for the baseline (SSE2), a call per component read.
+        let (a, b, d) = (self.corners[0][c], self.corners[1][c], self.corners[2][c]);
         let [wa, wb, wd] = &self.weights;
-        std::array::from_fn(|i| (a * wa[i] + b * wb[i]) + d * wd[i])
+        let mut out = [0.0f32; N];
+        for i in 0..N {
+            out[i] = (a * wa[i] + b * wb[i]) + d * wd[i];
+        }
+        out
     }
 
     /// The 2-vector from component `c` on, of every lane.
     #[inline(always)]
-    fn vec2(&self, c: usize) -> [[f32; BATCH_LANES]; 2] {
+    fn vec2(&self, c: usize) -> [[f32; N]; 2] {
         [self.component(c), self.component(c + 1)]
     }
 
     /// The 3-vector from component `c` on, of every lane.
     #[inline(always)]
-    fn vec3(&self, c: usize) -> Vec3xN<BATCH_LANES> {
+    fn vec3(&self, c: usize) -> Vec3xN<N> {
         Vec3xN {
             x: self.component(c),
             y: self.component(c + 1),
@@ -833,7 +867,7 @@ impl BatchVaryings {
     }
 }
 
-impl<'a> FurBatch<'a> {
+impl<'a, const N: usize> FurBatch<'a, N> {
     /// Whether lanes reading mip levels `lower` and `lower + 1` and shadow level `level` may
     /// join the lanes held (of the same draw: the same textures).
     #[inline(always)]
@@ -857,7 +891,6 @@ impl<'a> FurBatch<'a> {
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
-        const N: usize = BATCH_LANES;
         let len = self.len;
         if len == 0 {
             return;
@@ -958,7 +991,7 @@ impl<'a> FurBatch<'a> {
         }
         let lit = alive & passed;
         if lit == 0 {
-            self.slots = Default::default();
+            self.slots = [const { None }; N];
             return;
         }
         let mut write_lanes = |slots: &mut [Option<PixelSlot>; N],
@@ -1039,9 +1072,12 @@ impl<'a> FurBatch<'a> {
                             .with_converted(converted, self.shadow_index),
                         None => sampler.nearest_lookup(level),
                     };
-                    let uvs: [Vec2; N] = std::array::from_fn(|i| Vec2::new(u[i], v[i]));
-                    let offsets: [Vec2; N] =
-                        std::array::from_fn(|i| Vec2::new(offset_u[i], offset_v[i]));
+                    // Plain loops (`array::from_fn` stayed out of line at 16 lanes).
+                    let (mut uvs, mut offsets) = ([Vec2::ZERO; N], [Vec2::ZERO; N]);
+                    for i in 0..N {
+                        uvs[i] = Vec2::new(u[i], v[i]);
+                        offsets[i] = Vec2::new(offset_u[i], offset_v[i]);
+                    }
                     // `shading::shell_shadow_lanes`, step by step.
                     let mut sums =
                         shading::ShadowLanes::new(uvs, offsets, layer.lookups, p.shadow_texel);
@@ -1090,7 +1126,7 @@ impl<'a> FurBatch<'a> {
         let eye = varyings.vec3(EYE);
         let lighting = shading::strand_lighting_lanes(
             &lit_tangents_lanes(&encoded_tangent, &wind, &lean, layer, p),
-            &Vec3x8::splat(Vec3::Z),
+            &Vec3xN::splat(Vec3::Z),
             &light.normalize_or_zero(),
             &eye.normalize_or_zero(),
             p.exponents,
@@ -1139,12 +1175,12 @@ pub struct FurShader<'a> {
 }
 
 impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
-    type Deferred = FurBatch<'a>;
+    type Deferred<const N: usize> = FurBatch<'a, N>;
 
     #[inline(always)]
-    fn shade_quad(
+    fn shade_quad<const N: usize>(
         &self,
-        batch: &mut FurBatch<'a>,
+        batch: &mut FurBatch<'a, N>,
         quad: &Quad<'_, FurVaryings>,
         mut slots: QuadSlots,
         mut write: impl FnMut(PixelSlot, Vec4),
@@ -1169,7 +1205,11 @@ impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
     }
 
     #[inline(always)]
-    fn finish(&self, batch: &mut FurBatch<'a>, mut write: impl FnMut(PixelSlot, Vec4)) {
+    fn finish<const N: usize>(
+        &self,
+        batch: &mut FurBatch<'a, N>,
+        mut write: impl FnMut(PixelSlot, Vec4),
+    ) {
         batch.run(
             self.textures,
             self.maps,
@@ -1496,6 +1536,11 @@ mod tests {
 
     #[test]
     fn a_batch_interpolates_each_lane_as_the_whole_lane() {
+        batch_lanes_are_whole_lanes::<BATCH_LANES>();
+        batch_lanes_are_whole_lanes::<{ crate::simd::WIDE_LANES }>();
+    }
+
+    fn batch_lanes_are_whole_lanes<const N: usize>() {
         let mut rng = Lcg::new(29);
         let random = |rng: &mut Lcg| {
             let mut floats = [0.0f32; FUR_VARYING_FLOATS];
@@ -1504,7 +1549,7 @@ mod tests {
         };
         for _ in 0..200 {
             let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
-            let weights: [[f32; BATCH_LANES]; 3] =
+            let weights: [[f32; N]; 3] =
                 std::array::from_fn(|_| std::array::from_fn(|_| rng.range(-1.0, 2.0)));
             let batch = BatchVaryings {
                 triangle: [1, 2, 3],
@@ -1512,7 +1557,7 @@ mod tests {
                 weights,
             };
             let corner = corners.map(bytemuck::cast::<_, FurVaryings>);
-            for i in 0..BATCH_LANES {
+            for i in 0..N {
                 let whole = FurVaryings::weighted_sum(
                     &corner[0],
                     weights[0][i],

@@ -1,7 +1,8 @@
 //! Fragments side by side, one array per vector component (shading stage): the four lanes of a 2×2
-//! quad ([`Vec3x4`]) or the eight lit lanes of a batch ([`Vec3x8`]). Operations are plain per-lane
-//! loops over the arrays, which LLVM turns into packed instructions as wide as the level's copy of
-//! the hot path allows ([`crate::simd`]: 256 bits with AVX2, 128 on SSE2 and NEON).
+//! quad ([`Vec3x4`]) or the lit lanes of a batch ([`Vec3x8`]; 16 lanes in the AVX-512 copy).
+//! Operations are plain per-lane loops over the arrays, which LLVM turns into packed
+//! instructions as wide as the level's copy of the hot path allows ([`crate::simd`]: 512 bits
+//! with AVX-512, 256 with AVX2, 128 on SSE2 and NEON).
 //!
 //! Invariant: every operation here is, lane by lane, the same IEEE operations in the same
 //! order as its scalar twin on glam's `Vec3` (named in each doc comment), so a lane gives the
@@ -9,7 +10,7 @@
 //! reciprocals: Rust never contracts or reorders float operations on its own, and only
 //! correctly rounded operations are used (`+ − × ÷`, `sqrt`, comparisons and selects; never
 //! `wide`'s `recip`, `recip_sqrt` or `mul_add`). The tests check the bits against the twins on
-//! random, special and degenerate vectors, at 4 and 8 lanes.
+//! random, special and degenerate vectors, at 4, 8 and 16 lanes.
 
 // Lanes are indexed loops over several arrays at once: the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
@@ -216,6 +217,7 @@ pub(crate) mod tests {
     fn lane_operations_are_the_scalar_twins_bit_for_bit() {
         twins_bit_for_bit::<4>();
         twins_bit_for_bit::<8>();
+        twins_bit_for_bit::<16>();
     }
 
     fn twins_bit_for_bit<const N: usize>() {
