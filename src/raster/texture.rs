@@ -22,6 +22,8 @@ use super::RasterError;
 use glam::{Vec2, Vec4};
 use wide::{f32x4, i32x4};
 
+mod pairs512;
+
 /// One mip level: row-major RGBA8 texels, row 0 at v = 0.
 ///
 /// Invariant: `texels.len() == width × height`, both at least 1. Only [`Texture`] builds
@@ -174,9 +176,13 @@ struct PairTexel([u8; 8]);
 /// rounds to the quotient for every byte (test `unorm8_exact_is_the_quotient`).
 #[inline(always)]
 fn unorm8_exact(b: f32) -> f32 {
-    let y = b * (257.0 / 65536.0);
-    y + y * (1.0 / 65536.0 + 1.0 / 4_294_967_296.0)
+    let y = b * UNORM8_SCALE;
+    y + y * UNORM8_CORRECTION
 }
+
+/// The factors of [`unorm8_exact`]: `257/2^16`, then `2^-16 + 2^-32`.
+const UNORM8_SCALE: f32 = 257.0 / 65536.0;
+const UNORM8_CORRECTION: f32 = 1.0 / 65536.0 + 1.0 / 4_294_967_296.0;
 
 /// Two textures with one mip chain shape (a layer's colour and tangent maps), interleaved
 /// once: texel `i` of level `k` holds the first texture's RGBA bytes in 0–3 and the second's in
@@ -845,6 +851,15 @@ impl TrilinearPair<'_> {
         // line, compiled for the baseline (+39 % instructions a frame); a match inside the
         // loop cost as much.
         if let Some([converted_lower, converted_upper]) = self.converted {
+            #[cfg(target_arch = "x86_64")]
+            if N == pairs512::LANES && pairs512::available() {
+                // SAFETY: AVX-512 F, BW, DQ and VL were detected just above, `N` is 16, and
+                // the footprints address their levels as below (`high` is the upper level's
+                // for every lane whenever a lane blends).
+                return unsafe {
+                    pairs512::sample(&low, &high, frac, converted_lower, converted_upper)
+                };
+            }
             for i in 0..N {
                 // SAFETY: `footprint_lanes` addresses each level's rows and columns along its
                 // own size, and `with_converted` took converted levels of those texel counts.
@@ -1059,22 +1074,29 @@ impl NearestLookup<'_> {
         let (x, _) = self.u.address_lanes(0, &x);
         let (y, _) = self.v.address_lanes(0, &y);
         let row = self.level.width as usize;
-        let mut out = [0.0; N];
+        // The alpha bytes first, then `byte/255` of all lanes as packed arithmetic
+        // ([`unorm8_exact`], the same quotients as the table `UNORM8`): a table read per lane
+        // became a gather in the AVX-512 copy.
+        let mut bytes = [0u8; N];
         // Two written-out loops, as in `TrilinearPair::sample_lanes`.
         if let Some(converted) = self.converted {
             for i in 0..N {
                 let index = y[i] as usize * row + x[i] as usize;
                 // SAFETY: as below; `with_converted` took a converted level of this level's
                 // texel count.
-                out[i] = UNORM8[usize::from(unsafe { *converted.get_unchecked(index) })];
+                bytes[i] = unsafe { *converted.get_unchecked(index) };
             }
-            return out;
+        } else {
+            for i in 0..N {
+                // SAFETY: `x[i]` and `y[i]` are addressed along this level's width and height
+                // (`address_lanes` of addressing made from its size), so the index is in
+                // bounds.
+                bytes[i] = unsafe { self.level.texel_at(y[i] as usize * row + x[i] as usize) }[3];
+            }
         }
+        let mut out = [0.0; N];
         for i in 0..N {
-            // SAFETY: `x[i]` and `y[i]` are addressed along this level's width and height
-            // (`address_lanes` of addressing made from its size), so the index is in bounds.
-            let texel = unsafe { self.level.texel_at(y[i] as usize * row + x[i] as usize) };
-            out[i] = UNORM8[usize::from(texel[3])];
+            out[i] = unorm8_exact(f32::from(bytes[i]));
         }
         out
     }
@@ -1265,9 +1287,10 @@ mod tests {
         assert_eq!(pb, s.sample_level(&small, Vec2::splat(0.3), 0.7));
     }
 
-    /// `sample_lanes` on 8 and 4 lanes, each lane with its own coordinate (awkward ones among
-    /// them) and blend fraction (zero among them), gives each lane the bits of the pair taken
-    /// at its own level of detail; over wrapped and clamped, square and odd-shaped textures.
+    /// `sample_lanes` on 16, 8 and 4 lanes (16 from interleaved texels: `pairs512` where the
+    /// CPU has AVX-512), each lane with its own coordinate (awkward ones among them) and blend
+    /// fraction (zero among them), gives each lane the bits of the pair taken at its own level
+    /// of detail; over wrapped and clamped, square and odd-shaped textures.
     #[test]
     fn pair_lanes_are_single_pair_samples() {
         let pattern = |w: u32, h: u32, seed: u32| hashed_texture(w, h, 7, seed);
@@ -1296,7 +1319,7 @@ mod tests {
                     let pair = bytes.with_converted(&converted);
                     assert!(pair.converted.is_some(), "the converted levels are taken");
                     for round in 0..200u32 {
-                        let lods: [f32; 8] = std::array::from_fn(|_| {
+                        let lods: [f32; 16] = std::array::from_fn(|_| {
                             let r = next();
                             if r % 5 == 0 {
                                 k as f32
@@ -1304,7 +1327,7 @@ mod tests {
                                 k as f32 + (r >> 8) as f32 / (1u32 << 24) as f32
                             }
                         });
-                        let uvs: [Vec2; 8] = std::array::from_fn(|i| {
+                        let uvs: [Vec2; 16] = std::array::from_fn(|i| {
                             if (round + i as u32).is_multiple_of(3) {
                                 awkward_coordinates(next())
                             } else {
@@ -1327,15 +1350,22 @@ mod tests {
                             from_bytes.map(|c| c.map(f32::to_bits)),
                             "converted texels against bytes"
                         );
+                        let first = |x: &[f32; 16]| -> [f32; 8] { std::array::from_fn(|i| x[i]) };
+                        let eight = pair.sample_lanes(&first(&u), &first(&v), &first(&frac));
+                        assert_eq!(
+                            eight.map(|c| c.map(f32::to_bits)),
+                            lanes.map(|c| first(&c).map(f32::to_bits)),
+                            "8 lanes against the first 8 of 16"
+                        );
                         let quad = pair.sample_lanes(
                             &[u[0], u[1], u[2], u[3]],
                             &[v[0], v[1], v[2], v[3]],
                             &[frac[0], frac[1], frac[2], frac[3]],
                         );
-                        for i in 0..8 {
+                        for i in 0..16 {
                             let single = s.trilinear_pair(&a, &b, lods[i]).expect("same shape");
                             let (ca, cb) = single.sample(uvs[i]);
-                            let got = |c: &[[f32; 8]; 8], t: usize| {
+                            let got = |c: &[[f32; 16]; 8], t: usize| {
                                 Vec4::new(
                                     c[4 * t][i],
                                     c[4 * t + 1][i],
