@@ -408,7 +408,8 @@ pub fn scene_values(s: &Scene) -> Value {
         "light": { "direction": s.light.direction, "colour": s.light.colour },
         "spots": s.spots.iter().map(|p| json!({
             "kind": debug_name(p.kind), "colour": p.colour, "centre": p.centre, "radii": p.radii,
-            "inner": p.inner, "direction": p.direction, "exponent": p.exponent,
+            "inner": p.inner, "direction": p.direction, "position": p.position,
+            "reach": p.reach, "exponent": p.exponent,
             "inner_threshold": p.inner_threshold, "outer_threshold": p.outer_threshold,
         })).collect::<Vec<_>>(),
         "stripes": s.stripes.iter().map(|p| json!({
@@ -463,6 +464,18 @@ fn spot_json(spot: &Spot) -> Value {
             ..
         } => json!({
             "kind": "light", "direction_unit": direction, "exponent": exponent,
+            "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
+        }),
+        Spot::PointLight {
+            position,
+            reach,
+            exponent,
+            inner_threshold,
+            outer_threshold,
+            colour,
+            ..
+        } => json!({
+            "kind": "point_light", "position": position, "reach": reach, "exponent": exponent,
             "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
         }),
         Spot::LightStripe {
@@ -537,7 +550,10 @@ fn scene_json(
             "texture_repeat": s.fur.texture_repeat,
             "tile_world_size": prepared.tile_world_size(),
             "wind": wind,
-            "burn": shade.burn.as_ref().map(|b| json!({ "exponent": b.exponent, "matches_unit": b.matches })),
+            "burn": shade.burn.as_ref().map(|b| json!({
+                "exponent": b.exponent, "matches_unit": b.directions,
+                "match_points": b.points.iter().map(|m| json!({ "position": m.position, "reach": m.reach })).collect::<Vec<_>>(),
+            })),
             "spots": shade.spots.iter().map(spot_json).collect::<Vec<_>>(),
             "alpha_discard": ALPHA_DISCARD,
             "burn_threshold": crate::shading::BURN_THRESHOLD,

@@ -48,7 +48,7 @@ struct LayerUniforms {
 // [radii | 0 | 0 | (period, 0, 0) (xyz), inner | inner_threshold | width | width (w)],
 // [colour (xyz), outer_threshold | softness | softness (w)].
 @group(0) @binding(1) var<storage, read> spots: array<vec4<f32>>;
-// Unit match directions (3.4), xyz.
+// The matches (3.4): a unit direction with w = 0, or a position with w = its reach (> 0).
 @group(0) @binding(2) var<storage, read> matches: array<vec4<f32>>;
 // The surface maps in mesh uv (render/maps.rs), 1×1 placeholders where the scene has none
 // (frame.maps.x says which are real); read with textureLoad by `sample_map`.
@@ -423,6 +423,35 @@ fn light_spot_intensity(normal: vec3<f32>, spot_light_dir: vec3<f32>, exponent: 
     return pow01(dot(normalize_or_zero(normal), normalize_or_zero(spot_light_dir)), exponent);
 }
 
+// reach_falloff: (1 − d²/R²)² inside the reach, 0 beyond.
+fn reach_falloff(distance_squared: f32, reach: f32) -> f32 {
+    let q = distance_squared / (reach * reach);
+    if (q < 1.0 && reach > 0.0) {
+        let k = 1.0 - q;
+        return k * k;
+    }
+    return 0.0;
+}
+
+// point_light_cosine: n̂·o/√(o·o), o = light − point.
+fn point_light_cosine(unit_normal: vec3<f32>, offset: vec3<f32>) -> f32 {
+    let length_squared = dot(offset, offset);
+    if (length_squared > 0.0) {
+        return dot(unit_normal, offset) / sqrt(length_squared);
+    }
+    return 0.0;
+}
+
+// point_light_intensity: the lobe towards a light at a point, times its reach falloff.
+fn point_light_intensity(unit_normal: vec3<f32>, point: vec3<f32>, light: vec3<f32>, reach: f32, exponent: f32) -> f32 {
+    let offset = light - point;
+    let falloff = reach_falloff(dot(offset, offset), reach);
+    if (falloff == 0.0) {
+        return 0.0;
+    }
+    return pow01(point_light_cosine(unit_normal, offset), exponent) * falloff;
+}
+
 fn spot_gradient(intensity: f32, inner_threshold: f32, outer_threshold: f32) -> f32 {
     return ramp(intensity, outer_threshold, inner_threshold);
 }
@@ -469,6 +498,9 @@ fn apply_spots(fur_colour: vec3<f32>, object: vec3<f32>, normal: vec3<f32>) -> v
             weight = spot_gradient(lobe, b.w, c.w);
         } else if (head.x == 2.0) {
             weight = stripe_intensity(dot(object, a.xyz), a.w, b.w, c.w);
+        } else if (head.x == 4.0) {
+            let lobe = point_light_intensity(normalize_or_zero(normal), object, a.xyz, b.x, a.w);
+            weight = spot_gradient(lobe, b.w, c.w);
         } else {
             let lobe = light_spot_intensity(normal, a.xyz, a.w);
             weight = light_stripe_band(lobe, b.x, b.w, c.w);
@@ -701,21 +733,35 @@ fn burn_rule(intensity: f32, shell_index: u32, max_shell: u32) -> BurnOutcome {
     return BurnOutcome(CHARRED, 1.0 - i);
 }
 
-// BurnState::intensity: the strongest match lobe.
-fn burn_intensity(normal: vec3<f32>) -> f32 {
+// BurnState::intensity: the strongest match. The matches by direction take the lobe of their
+// largest cosine (one power); each match at a point its lobe times its reach falloff.
+fn burn_intensity(normal: vec3<f32>, point: vec3<f32>) -> f32 {
+    let unit_normal = normalize_or_zero(normal);
+    let exponent = frame.shading2.z;
     var strongest = 0.0;
+    var cosine = -2.0;
+    var directions = false;
     for (var m = 0u; m < frame.counts.w; m++) {
-        strongest = max(strongest, light_spot_intensity(normal, matches[m].xyz, frame.shading2.z));
+        let light = matches[m];
+        if (light.w == 0.0) {
+            cosine = max(cosine, dot(unit_normal, normalize_or_zero(light.xyz)));
+            directions = true;
+        } else {
+            strongest = max(strongest, point_light_intensity(unit_normal, point, light.xyz, light.w, exponent));
+        }
+    }
+    if (directions) {
+        strongest = max(strongest, pow01(cosine, exponent));
     }
     return strongest;
 }
 
-// ShadeParams::burn_outcome.
-fn burn_outcome(normal: vec3<f32>, index: u32, max_shell: u32) -> BurnOutcome {
+// ShadeParams::burn_outcome, at a surface point (object space, rest pose).
+fn burn_outcome(normal: vec3<f32>, point: vec3<f32>, index: u32, max_shell: u32) -> BurnOutcome {
     if (frame.shading2.w == 0.0) {
         return BurnOutcome(UNBURNT, 1.0);
     }
-    return burn_rule(burn_intensity(normal), index, max_shell);
+    return burn_rule(burn_intensity(normal, point), index, max_shell);
 }
 
 fn strand_colour_after_burn(b: BurnOutcome, strand_colour: vec3<f32>) -> vec3<f32> {
@@ -764,6 +810,7 @@ struct SkinVaryings {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) rest_normal: vec3<f32>,
+    @location(2) rest_position: vec3<f32>,
 }
 
 // The skin's vertex closure: the posed normal lights it, the rest normal meets the matches.
@@ -772,6 +819,7 @@ fn skin_vertex(v: MeshVertex) -> SkinVaryings {
     out.clip = frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0);
     out.normal = v.normal;
     out.rest_normal = v.rest_normal;
+    out.rest_position = v.rest_position;
     return out;
 }
 
@@ -931,7 +979,7 @@ fn fs_skin(v: SkinVaryings) -> @location(0) vec4<f32> {
     }
     let n = normalize_or_zero(v.normal);
     let rest = normalize_or_zero(v.rest_normal);
-    let colour = strand_colour_after_burn(burn_outcome(rest, 0u, layer.max_shell), frame.skin_colour.xyz);
+    let colour = strand_colour_after_burn(burn_outcome(rest, v.rest_position, 0u, layer.max_shell), frame.skin_colour.xyz);
     return vec4<f32>(colour * (0.5 + 0.5 * max(dot(n, frame.light.xyz), 0.0)), 1.0);
 }
 
@@ -1079,7 +1127,7 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     let ddx = dpdxCoarse(v.uv);
     let ddy = dpdyCoarse(v.uv);
     // 1. Burning (3.4): a burnt texel is discarded before any texture read.
-    let burn = burn_outcome(v.normal, layer.index, layer.max_shell);
+    let burn = burn_outcome(v.normal, v.object, layer.index, layer.max_shell);
     if (burn.kind == BURNT) {
         discard;
     }

@@ -12,7 +12,7 @@
 //! | eq. 3.7 | [`final_colour`], [`ShadingWeights`], [`ambient_term`] ([`ambient_constant`], [`ambient_of_strand`]) | `lighting.rs` |
 //! | 3.2.2 projection | [`project_to_uv`], [`project_to_uv_dropping`] | `projection.rs` |
 //! | 3.2.2 shadow | [`shadow_change`], [`shadow_lookup_count`], [`shell_shadow`], [`shadow_texel`] ([`shadow_of_opaque`], [`shadow_of_alpha`]) | `shadow.rs` |
-//! | 3.2.4 spots, stripes | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`], [`light_stripe_intensity`] | `spots.rs` |
+//! | 3.2.4 spots, stripes; 3.4 matches at points | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`point_light_intensity`] ([`point_light_cosine`], [`reach_falloff`]), [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`], [`light_stripe_intensity`] | `spots.rs` |
 //! | 3.3 wind | [`wind_force`], [`wind_displacement`], [`wind_uv_offset`], [`bend_tangent`] | `wind.rs` |
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
 //! | beyond: maps | [`layer_within_length`], [`density_alpha`], [`density_band`], [`comb_lean`], [`tint_strand`] | `maps.rs` |
@@ -128,7 +128,8 @@ pub use spots::{
     apply_spot, apply_spot_lanes, apply_spots, ellipsoid_spot_intensity,
     ellipsoid_spot_intensity_lanes, light_spot_cosine, light_spot_cosine_below,
     light_spot_intensity, light_spot_lobe, light_spot_lobe_lanes, light_stripe_band,
-    light_stripe_intensity, spot_gradient, spot_gradient_lanes, stripe_intensity,
+    light_stripe_intensity, point_light_cosine, point_light_intensity, reach_falloff,
+    spot_gradient, spot_gradient_lanes, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{
