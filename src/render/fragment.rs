@@ -458,6 +458,56 @@ impl BurnState {
         }
         strongest
     }
+
+    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits: the
+    /// cosines and their largest as plain loops over the lanes, the one power of the matches
+    /// by direction for all lanes at once ([`shading::light_spot_lobe_lanes`], skipped where
+    /// every lane is surely under the threshold), the matches at points lane by lane.
+    #[inline]
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    pub fn intensity_lanes<const N: usize>(
+        &self,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+    ) -> [f32; N] {
+        let mut strongest = [0.0f32; N];
+        if !self.cosine_directions.is_empty() {
+            let mut cosine = [f32::NEG_INFINITY; N];
+            for &m in &self.cosine_directions {
+                let dot = unit_normals.dot(&Vec3xN::splat(m));
+                for i in 0..N {
+                    cosine[i] = cosine[i].max(dot[i]);
+                }
+            }
+            if cosine.iter().any(|&c| c >= self.unburnt_below) {
+                let lobe = shading::light_spot_lobe_lanes(cosine, self.exponent);
+                for i in 0..N {
+                    strongest[i] = if cosine[i] >= self.unburnt_below {
+                        lobe[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+        if !self.points.is_empty() {
+            for i in 0..N {
+                let (unit_normal, point) = (unit_normals.lane(i), points.lane(i));
+                for m in &self.points {
+                    let offset = m.position - point;
+                    let falloff = shading::reach_falloff(offset.dot(offset), m.reach);
+                    if falloff > 0.0 {
+                        let cosine = shading::point_light_cosine(unit_normal, offset);
+                        if cosine >= self.unburnt_below {
+                            strongest[i] = strongest[i]
+                                .max(shading::light_spot_lobe(cosine, self.exponent) * falloff);
+                        }
+                    }
+                }
+            }
+        }
+        strongest
+    }
 }
 
 /// The scene's shading parameters and effects, resolved once per frame.
@@ -903,15 +953,31 @@ fn quad_entry_lanes(
         charred: 0,
         char_factor: [1.0; 4],
     };
+    // The burn's intensity of the four lanes at once (helper lanes too; their result is
+    // dropped).
+    let intensity = p.burn.as_ref().map(|b| {
+        let mut unit_normals = Vec3xN::<4>::default();
+        let mut objects = Vec3xN::<4>::default();
+        for lane in 0..4 {
+            let n = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
+            let o = quad.field(lane, |v| &v.surface.object);
+            (
+                unit_normals.x[lane],
+                unit_normals.y[lane],
+                unit_normals.z[lane],
+            ) = n.into();
+            (objects.x[lane], objects.y[lane], objects.z[lane]) = o.into();
+        }
+        b.intensity_lanes(&unit_normals, &objects)
+    });
     for lane in 0..4 {
         if slots.lanes() & (1 << lane) == 0 {
             continue;
         }
         let mut shown = true;
-        if p.burn.is_some() {
-            let unit_normal = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
-            let object = quad.field(lane, |v| &v.surface.object);
-            match p.burn_outcome_at_unit_normal(unit_normal, object, layer) {
+        if let Some(intensity) = intensity {
+            // `ShadeParams::burn_outcome_at_unit_normal`, its intensity found above.
+            match shading::burn_rule(intensity[lane], layer.index, layer.max_shell) {
                 BurnOutcome::Burnt => shown = false,
                 BurnOutcome::Charred { colour_factor } => {
                     entry.charred |= 1 << lane;
@@ -1722,6 +1788,47 @@ mod tests {
             Vec3::Y,
         ]);
         v
+    }
+
+    #[test]
+    fn burn_intensity_lanes_are_the_scalar_intensity_bit_for_bit() {
+        let mut rng = Lcg::new(57);
+        for round in 0..200 {
+            let directions: Vec<Vec3> = (0..round % 7)
+                .map(|_| rng.cube().normalize_or_zero())
+                .collect();
+            let points: Vec<PointMatch> = (0..round % 3)
+                .map(|_| PointMatch {
+                    position: rng.cube() * 3.0,
+                    reach: rng.range(0.5, 6.0),
+                })
+                .collect();
+            let exponent = rng.range(0.5, 400.0);
+            let burn = BurnState {
+                cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
+                directions,
+                points,
+                exponent,
+                unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
+            };
+            let mut normals = Vec3xN::<4>::default();
+            let mut objects = Vec3xN::<4>::default();
+            for i in 0..4 {
+                let n = rng.cube().normalize_or_zero();
+                let o = rng.cube() * 3.0;
+                (normals.x[i], normals.y[i], normals.z[i]) = n.into();
+                (objects.x[i], objects.y[i], objects.z[i]) = o.into();
+            }
+            let lanes = burn.intensity_lanes(&normals, &objects);
+            for i in 0..4 {
+                let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
+                assert_eq!(
+                    lanes[i].to_bits(),
+                    scalar.to_bits(),
+                    "round {round} lane {i}"
+                );
+            }
+        }
     }
 
     #[test]
