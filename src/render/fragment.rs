@@ -1820,13 +1820,9 @@ mod tests {
                 (objects.x[i], objects.y[i], objects.z[i]) = o.into();
             }
             let lanes = burn.intensity_lanes(&normals, &objects);
-            for i in 0..4 {
+            for (i, lane) in lanes.iter().enumerate() {
                 let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
-                assert_eq!(
-                    lanes[i].to_bits(),
-                    scalar.to_bits(),
-                    "round {round} lane {i}"
-                );
+                assert_eq!(lane.to_bits(), scalar.to_bits(), "round {round} lane {i}");
             }
         }
     }
