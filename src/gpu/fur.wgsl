@@ -17,7 +17,8 @@ struct FrameUniforms {
     skin_colour: vec4<f32>,    // xyz: fur colour · 0.35
     wind: vec4<f32>,           // xyz: unit wind direction, w: wind_force(time) (3.3)
     fur: vec4<f32>,            // x, y: texture_repeat; z: model_difference; w: 1 when wind is on
-    shading: vec4<f32>,        // ambient, banks_exponent, specular_exponent, dampened_exponent
+    shading: vec4<f32>,        // ambient, banks_exponent, specular_exponent, the exponent of the
+                               // uncoloured term's lobe (dampened_exponent; eq. 3.5: specular_exponent)
     shading2: vec4<f32>,       // tangent_shift, wind_tangent_fraction, burn exponent, 1 when burning
     weights: vec4<f32>,        // eq. 3.7 weights: ambient, diffuse, specular, dampened
     weights2: vec4<f32>,       // x: shadow weight; y, z, w: 1 for SpecularLobes::Sum,
@@ -28,6 +29,8 @@ struct FrameUniforms {
     maps: vec4<u32>,           // x: maps present (1 length, 2 density, 4 direction, 8 colour);
                                // y, z: address along u, v (0 clamp, 1 wrap); w: 1 when the
                                // layers are not pulled back (wind.keep_length = false)
+    lighting: vec4<f32>,       // x: 1 for eq. 3.5 (LightingModel::Eq35), 0 for eq. 3.6/3.7;
+                               // y: n of (ψ_specularity1)^n; z, w: 0
 }
 
 struct LayerUniforms {
@@ -255,6 +258,20 @@ fn dampened_specular(s: f32) -> f32 {
         return 0.5 * s;
     }
     return 0.0;
+}
+
+// specularity1_power: eq. 3.5's last term, (ψ_specularity1)^n.
+fn specularity1_power(specularity1: f32, n: f32) -> f32 {
+    return pow01(specularity1, n);
+}
+
+// uncoloured_specular: the last term, from the lobe of the strand's own tangent: the dampened
+// specular (eq. 3.6/3.7), or (ψ_specularity1)^n under eq. 3.5.
+fn uncoloured_specular(lobe: f32) -> f32 {
+    if (frame.lighting.x != 0.0) {
+        return specularity1_power(lobe, frame.lighting.y);
+    }
+    return dampened_specular(lobe);
 }
 
 // Eq. 3.7: A + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow,
@@ -1194,12 +1211,13 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
         let g = clamp(1.0 - frame.weights2.x * shadow, 0.0, 1.0);
         return vec4<f32>(g, g, g, alpha);
     }
-    // 7. Kajiya–Kay (eq. 2.5, 2.7), the dampened specular (3.2.3), eq. 3.7.
+    // 7. Kajiya–Kay (eq. 2.5, 2.7), the uncoloured last term (the dampened specular of 3.2.3,
+    // or eq. 3.5's (ψ_specularity1)^n), eq. 3.7.
     let s = frame.shading;
     let diffuse = kajiya_kay_diffuse(tangent, light, s.y);
     let specular = specular_with_tangents(tangent, vec3<f32>(0.0, 0.0, 1.0), light, eye, s.z,
                                           frame.counts.x, frame.shading2.x);
-    let dampened = dampened_specular(kajiya_kay_specular(tangent, light, eye, s.w));
+    let dampened = uncoloured_specular(kajiya_kay_specular(tangent, light, eye, s.w));
     let colour = final_colour(strand, frame.light_colour.xyz, s.x, diffuse, specular, dampened, shadow);
     return vec4<f32>(colour, alpha);
 }

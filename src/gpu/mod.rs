@@ -1746,6 +1746,12 @@ pub fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
     ] {
         bytes.extend(v.to_le_bytes());
     }
+    // The lighting equation (fur.wgsl's `uncoloured_specular`): eq. 3.5 and its n, or eq. 3.6.
+    let lighting = match shade.lighting {
+        crate::shading::LightingModel::Eq36 => Vec4::ZERO,
+        crate::shading::LightingModel::Eq35 { n } => Vec4::new(1.0, n, 0.0, 0.0),
+    };
+    bytes.extend(lighting.to_array().iter().flat_map(|c| c.to_le_bytes()));
     bytes
 }
 

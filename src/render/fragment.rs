@@ -517,8 +517,11 @@ pub struct ShadeParams {
     pub light_colour: Vec3,
     /// Ambient level.
     pub ambient: f32,
-    /// Exponents of the diffuse, specular and dampened specular terms.
+    /// Exponents of the diffuse, specular and the uncoloured last term's lobe (the dampened
+    /// exponent, or under eq. 3.5 the specular exponent: [`shading::LightingModel::lobe_exponent`]).
     pub exponents: shading::LightingExponents,
+    /// The lighting equation: what the uncoloured last term is (eq. 3.6/3.7 or eq. 3.5).
+    pub lighting: shading::LightingModel,
     /// One or three tangents (and how three combine).
     pub tangents: SpecularTangents,
     /// Where `ψ_ambient` of eq. 3.7 stands.
@@ -650,14 +653,22 @@ impl ShadeParams {
                 }
             })
         });
+        let lighting = match s.shading.lighting {
+            crate::scene::LightingSetting::Eq36 => shading::LightingModel::Eq36,
+            crate::scene::LightingSetting::Eq35 => shading::LightingModel::Eq35 {
+                n: s.shading.specular1_exponent,
+            },
+        };
         ShadeParams {
             light_colour: s.light.colour,
             ambient: s.shading.ambient,
             exponents: shading::LightingExponents {
                 banks: s.shading.banks_exponent,
                 specular: s.shading.specular_exponent,
-                dampened: s.shading.dampened_exponent,
+                dampened: lighting
+                    .lobe_exponent(s.shading.specular_exponent, s.shading.dampened_exponent),
             },
+            lighting,
             tangents: if s.shading.specular_tangents == 3 {
                 SpecularTangents::Three(match s.shading.specular_lobes {
                     SpecularLobesSetting::Sum => SpecularLobes::Sum,
@@ -1330,7 +1341,7 @@ impl<'a> FurBatch<'a> {
             p.ambient,
             lighting.diffuse,
             lighting.specular,
-            shading::dampened_specular_lanes(lighting.specular_to_dampen),
+            shading::uncoloured_specular_lanes(lighting.specular_to_dampen, p.lighting),
             shadow,
             &p.weights,
             p.ambient_term,
@@ -1502,10 +1513,11 @@ impl LitSurface {
         lit_tangent(self.encoded_tangent, v.wind, v.lean, layer, p)
     }
 
-    /// The dampened specular (3.2.3) and eq. 3.7, with this fragment's alpha.
+    /// The uncoloured last term (the dampened specular of 3.2.3, or eq. 3.5's
+    /// `(ψ_specularity1)^n`) and eq. 3.7, with this fragment's alpha.
     #[inline(always)]
     fn colour(&self, lighting: shading::StrandLighting, p: &ShadeParams) -> Vec4 {
-        let dampened = shading::dampened_specular(lighting.specular_to_dampen);
+        let dampened = shading::uncoloured_specular(lighting.specular_to_dampen, p.lighting);
         shading::final_colour(
             self.strand,
             p.light_colour,

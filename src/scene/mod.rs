@@ -399,6 +399,20 @@ pub enum AmbientTermSetting {
     Strand,
 }
 
+/// Which equation of thesis 3.2.3 lights the fur ([`crate::shading::LightingModel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+pub enum LightingSetting {
+    /// Eq. 3.6 with the shadow of eq. 3.7: the dampened specular as the uncoloured last term;
+    /// the default.
+    #[default]
+    #[serde(rename = "eq-3.6")]
+    Eq36,
+    /// Eq. 3.5: `(ψ_specularity1)^n` as the uncoloured last term, `n` =
+    /// `shading.specular1_exponent` (thesis figure 3.13).
+    #[serde(rename = "eq-3.5")]
+    Eq35,
+}
+
 /// What one shell-shadow lookup adds (thesis 3.2.2; [`crate::shading::ShadowTexel`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -448,8 +462,12 @@ pub struct ShadingSettings {
     pub banks_exponent: f32,
     /// Kajiya–Kay specular exponent.
     pub specular_exponent: f32,
-    /// The low exponent of the dampened specular.
+    /// The low exponent of the dampened specular (eq. 3.6/3.7).
     pub dampened_exponent: f32,
+    /// The lighting equation: eq. 3.6/3.7 (dampened specular) or eq. 3.5.
+    pub lighting: LightingSetting,
+    /// `n` of eq. 3.5's `(ψ_specularity1)^n` (with `lighting = "eq-3.5"`).
+    pub specular1_exponent: f32,
     /// 1 or 3 specular tangents (Scheuermann).
     pub specular_tangents: u32,
     /// With 3 tangents: the sum (thesis) or the mean of the three lobes.
@@ -475,6 +493,8 @@ impl Default for ShadingSettings {
             banks_exponent: 4.8,
             specular_exponent: 24.0,
             dampened_exponent: 4.0,
+            lighting: LightingSetting::default(),
+            specular1_exponent: 1.0,
             specular_tangents: 1,
             specular_lobes: SpecularLobesSetting::default(),
             ambient_term: AmbientTermSetting::default(),

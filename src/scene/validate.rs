@@ -343,6 +343,12 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         0.0,
         4096.0,
     )?;
+    range_f32(
+        "shading.specular1_exponent",
+        s.specular1_exponent,
+        0.0,
+        4096.0,
+    )?;
     if !matches!(s.specular_tangents, 1 | 3) {
         return Err((
             "shading.specular_tangents".into(),
@@ -836,6 +842,10 @@ mod tests {
         let err = parse("[shading]\nweights = { shadow = -1.0 }\n").unwrap_err();
         assert_eq!(err.line, Some(2), "{err}");
         assert!(err.message.contains("shading.weights.shadow"), "{err}");
+        let err =
+            parse("[shading]\nlighting = \"eq-3.5\"\nspecular1_exponent = -2.0\n").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.contains("shading.specular1_exponent"), "{err}");
     }
 
     #[test]
@@ -917,6 +927,7 @@ mod tests {
                 "outside",
             ),
             ("[shading]", "shadow_texel", ["opaque", "alpha"], "count"),
+            ("[shading]", "lighting", ["eq-3.6", "eq-3.5"], "eq-3.4"),
             ("[[stripes]]", "kind", ["axis", "light"], "band"),
         ] {
             for value in good {
