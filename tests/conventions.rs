@@ -1,12 +1,14 @@
 //! The four places where pelage's default departs from the thesis, or follows it, each chosen
 //! by a scene key (README, "Where pelage departs from the thesis"): the other choice changes the
-//! image, and with every choice the quad fragment stage and its scalar twin give the same bytes.
+//! image, and with every choice the quad fragment stage and its scalar twin give the same bytes;
+//! so does the lighting equation of thesis 3.2.3 (`lighting = "eq-3.5"` and its exponent).
 
 mod common;
 use common::scene;
 
 use pelage::scene::{
-    AmbientTermSetting, Scene, ShadowTexelSetting, SpecularLobesSetting, StripeKind, StripeSettings,
+    AmbientTermSetting, LightingSetting, Scene, ShadowTexelSetting, SpecularLobesSetting,
+    StripeKind, StripeSettings,
 };
 
 /// The image, after checking that the scalar twin of the fragment stage gives the same bytes.
@@ -40,6 +42,14 @@ fn each_convention_key_changes_the_image_and_both_stages_agree() {
     s.shading.shadow_texel = ShadowTexelSetting::Opaque;
     variants.push(("shadow_texel = opaque", s));
     variants.push(("stripes kind = axis", base(StripeKind::Axis)));
+    // Eq. 3.5 (the lighting model, not a departure): its last term in place of the dampened
+    // specular, at the default n = 1 and at another n.
+    let mut s = defaults.clone();
+    s.shading.lighting = LightingSetting::Eq35;
+    variants.push(("lighting = eq-3.5", s.clone()));
+    let eq35 = render(&s);
+    s.shading.specular1_exponent = 4.0;
+    assert!(render(&s) != eq35, "specular1_exponent changed nothing");
     for (what, s) in &variants {
         assert!(render(s) != reference, "{what} changed nothing");
     }
@@ -51,6 +61,8 @@ fn the_defaults_are_the_documented_ones() {
     assert_eq!(s.shading.specular_lobes, SpecularLobesSetting::Average);
     assert_eq!(s.shading.ambient_term, AmbientTermSetting::Strand);
     assert_eq!(s.shading.shadow_texel, ShadowTexelSetting::Alpha);
+    assert_eq!(s.shading.lighting, LightingSetting::Eq36);
+    assert_eq!(s.shading.specular1_exponent, 1.0);
     assert_eq!(StripeSettings::default().kind, StripeKind::Light);
 }
 

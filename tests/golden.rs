@@ -200,6 +200,7 @@ golden! {
     torus => "torus",
     tangents => "tangents",
     specular => "specular",
+    specular_eq35 => "specular-eq35",
     leg => "leg",
     bull => "bull",
     face => "face",

@@ -11,7 +11,7 @@ use pelage::render::PreparedScene;
 use pelage::simd::SimdLevel;
 
 /// Scenes that between them take every path of the fragment stage: shadows and wind, spots,
-/// burning, density and length maps, three tangents, level of detail, fins.
+/// burning, density and length maps, three tangents, eq. 3.5, level of detail, fins.
 const SCENES: &[(&str, f32)] = &[
     ("thesis-4-2", 0.0),
     ("spots", 0.0),
@@ -19,6 +19,7 @@ const SCENES: &[(&str, f32)] = &[
     ("density", 0.0),
     ("painted-length", 0.0),
     ("specular", 0.0),
+    ("specular-eq35", 0.0),
     ("lod-flyaway", 2.0),
     ("face", 0.0),
 ];

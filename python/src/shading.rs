@@ -115,6 +115,26 @@ fn dampened_specular<'py>(py: Python<'py>, n: usize, specular: Floats<'py>) -> O
     ))
 }
 
+/// Eq. 3.5's last term, `(ψ_specularity1)^n`.
+#[pyfunction]
+fn specularity1_power<'py>(
+    py: Python<'py>,
+    n: usize,
+    specularity1: Floats<'py>,
+    exponent: Floats<'py>,
+) -> Out<'py> {
+    let (s, p) = (
+        slice_of(&specularity1, "specularity1", n, 1)?,
+        slice_of(&exponent, "exponent", n, 1)?,
+    );
+    Ok(floats(
+        py,
+        (0..n)
+            .map(|i| terms::specularity1_power(s[i], p[i]))
+            .collect(),
+    ))
+}
+
 /// Eq. 3.7, the final colour.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // one argument per term of eq. 3.7, in its order
@@ -463,6 +483,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kajiya_kay_specular, m)?)?;
     m.add_function(wrap_pyfunction!(sin_between, m)?)?;
     m.add_function(wrap_pyfunction!(dampened_specular, m)?)?;
+    m.add_function(wrap_pyfunction!(specularity1_power, m)?)?;
     m.add_function(wrap_pyfunction!(final_colour, m)?)?;
     m.add_function(wrap_pyfunction!(shadow_change, m)?)?;
     m.add_function(wrap_pyfunction!(project_to_uv, m)?)?;

@@ -22,6 +22,25 @@ def test_documented_values():
     assert damp.tolist() == [np.float32(0.2), np.float32(0.3), np.float32(0.3), 0.0]
 
 
+def test_eq_3_5_last_term_against_float64():
+    # (ψ_specularity1)^n against NumPy's float64 power: pelage's own pow01 is within
+    # 3·(1 + |n·log2 s|) ulp (the library's bound), here taken as 4·(…)·2^-23 relative.
+    rng = np.random.default_rng(35)
+    s = rng.uniform(1e-6, 1.0, size=1000).astype(np.float32)
+    n = rng.uniform(0.25, 16.0, size=1000).astype(np.float32)
+    got = shading.specularity1_power(s, n)
+    assert got.shape == (1000,) and got.dtype == np.float32
+    exact = s.astype(np.float64) ** n.astype(np.float64)
+    t = np.abs(n.astype(np.float64) * np.log2(s.astype(np.float64)))
+    assert np.all(np.abs(got - exact) <= 4 * (1 + t) * exact * 2.0**-23 + 1e-38)
+    # The default n = 1 is the plain specular within an ulp or two; the range is [0, 1].
+    plain = shading.specularity1_power([0.25, 0.8])
+    assert np.allclose(plain, [0.25, 0.8], rtol=3e-7, atol=0)
+    assert shading.specularity1_power([-1.0, 2.0, math.nan], 3.0).tolist() == [0.0, 1.0, 0.0]
+    # Element by element, the library's bits: a scalar call is one element of the array call.
+    assert shading.specularity1_power(s[7], n[7]).tobytes() == got[7].tobytes()
+
+
 def test_broadcasting_and_shapes():
     rng = np.random.default_rng(1)
     tangents = rng.normal(size=(5, 7, 3)).astype(np.float32)

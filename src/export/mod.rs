@@ -392,6 +392,11 @@ pub fn scene_values(s: &Scene) -> Value {
             "banks_exponent": s.shading.banks_exponent,
             "specular_exponent": s.shading.specular_exponent,
             "dampened_exponent": s.shading.dampened_exponent,
+            "lighting": match s.shading.lighting {
+                crate::scene::LightingSetting::Eq36 => "eq-3.6",
+                crate::scene::LightingSetting::Eq35 => "eq-3.5",
+            },
+            "specular1_exponent": s.shading.specular1_exponent,
             "specular_tangents": s.shading.specular_tangents,
             "specular_lobes": debug_name(s.shading.specular_lobes),
             "ambient_term": debug_name(s.shading.ambient_term),
@@ -408,7 +413,8 @@ pub fn scene_values(s: &Scene) -> Value {
         "light": { "direction": s.light.direction, "colour": s.light.colour },
         "spots": s.spots.iter().map(|p| json!({
             "kind": debug_name(p.kind), "colour": p.colour, "centre": p.centre, "radii": p.radii,
-            "inner": p.inner, "direction": p.direction, "exponent": p.exponent,
+            "inner": p.inner, "direction": p.direction, "position": p.position,
+            "reach": p.reach, "exponent": p.exponent,
             "inner_threshold": p.inner_threshold, "outer_threshold": p.outer_threshold,
         })).collect::<Vec<_>>(),
         "stripes": s.stripes.iter().map(|p| json!({
@@ -463,6 +469,18 @@ fn spot_json(spot: &Spot) -> Value {
             ..
         } => json!({
             "kind": "light", "direction_unit": direction, "exponent": exponent,
+            "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
+        }),
+        Spot::PointLight {
+            position,
+            reach,
+            exponent,
+            inner_threshold,
+            outer_threshold,
+            colour,
+            ..
+        } => json!({
+            "kind": "point_light", "position": position, "reach": reach, "exponent": exponent,
             "inner_threshold": inner_threshold, "outer_threshold": outer_threshold, "colour": colour,
         }),
         Spot::LightStripe {
@@ -537,7 +555,10 @@ fn scene_json(
             "texture_repeat": s.fur.texture_repeat,
             "tile_world_size": prepared.tile_world_size(),
             "wind": wind,
-            "burn": shade.burn.as_ref().map(|b| json!({ "exponent": b.exponent, "matches_unit": b.matches })),
+            "burn": shade.burn.as_ref().map(|b| json!({
+                "exponent": b.exponent, "matches_unit": b.directions,
+                "match_points": b.points.iter().map(|m| json!({ "position": m.position, "reach": m.reach })).collect::<Vec<_>>(),
+            })),
             "spots": shade.spots.iter().map(spot_json).collect::<Vec<_>>(),
             "alpha_discard": ALPHA_DISCARD,
             "burn_threshold": crate::shading::BURN_THRESHOLD,
@@ -587,7 +608,7 @@ fn scene_json(
             "output": "8-bit channel = ⌊255·clamp(c, 0, 1) + 0.5⌋, no colour-space conversion",
             "texel": "byte / 255, linear",
             "tangent_encoding": "unorm8(t·0.5 + 0.5), tangent space (x = u, y = v, z = away from skin)",
-            "fragment_order": "burn (3.4), length cut (shells), wind and lean reverse lookup (3.3), colour and tangent maps, density (bands on shells, a factor on fins), lod_alpha, colour map tint, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), lean-bent tangent, shell shadow (3.2.2; through the density bands), Kajiya–Kay (2.5, 2.7), dampened specular, eq. 3.7",
+            "fragment_order": "burn (3.4), length cut (shells), wind and lean reverse lookup (3.3), colour and tangent maps, density (bands on shells, a factor on fins), lod_alpha, colour map tint, spots and stripes (3.2.4), charring, wind-bent tangent (3.3.1), lean-bent tangent, shell shadow (3.2.2; through the density bands), Kajiya–Kay (2.5, 2.7), the uncoloured last term (dampened specular, or eq. 3.5's (ψ_specularity1)^n), eq. 3.7",
             "vertex_order": "length = length map at the vertex (1 without); offset and strand height × length; displacement = wind_displacement (wind alone) or lean_displacement(wind direction·clamp(force) + lean + comb, …) with a lean; position + normal·offset + vertex_pull(displacement) (only the part along the normal: the sideways part is the texture lookup uv − wind_uv) + object offset",
         },
     })

@@ -17,7 +17,8 @@ struct FrameUniforms {
     skin_colour: vec4<f32>,    // xyz: fur colour · 0.35
     wind: vec4<f32>,           // xyz: unit wind direction, w: wind_force(time) (3.3)
     fur: vec4<f32>,            // x, y: texture_repeat; z: model_difference; w: 1 when wind is on
-    shading: vec4<f32>,        // ambient, banks_exponent, specular_exponent, dampened_exponent
+    shading: vec4<f32>,        // ambient, banks_exponent, specular_exponent, the exponent of the
+                               // uncoloured term's lobe (dampened_exponent; eq. 3.5: specular_exponent)
     shading2: vec4<f32>,       // tangent_shift, wind_tangent_fraction, burn exponent, 1 when burning
     weights: vec4<f32>,        // eq. 3.7 weights: ambient, diffuse, specular, dampened
     weights2: vec4<f32>,       // x: shadow weight; y, z, w: 1 for SpecularLobes::Sum,
@@ -28,6 +29,8 @@ struct FrameUniforms {
     maps: vec4<u32>,           // x: maps present (1 length, 2 density, 4 direction, 8 colour);
                                // y, z: address along u, v (0 clamp, 1 wrap); w: 1 when the
                                // layers are not pulled back (wind.keep_length = false)
+    lighting: vec4<f32>,       // x: 1 for eq. 3.5 (LightingModel::Eq35), 0 for eq. 3.6/3.7;
+                               // y: n of (ψ_specularity1)^n; z, w: 0
 }
 
 struct LayerUniforms {
@@ -48,7 +51,7 @@ struct LayerUniforms {
 // [radii | 0 | 0 | (period, 0, 0) (xyz), inner | inner_threshold | width | width (w)],
 // [colour (xyz), outer_threshold | softness | softness (w)].
 @group(0) @binding(1) var<storage, read> spots: array<vec4<f32>>;
-// Unit match directions (3.4), xyz.
+// The matches (3.4): a unit direction with w = 0, or a position with w = its reach (> 0).
 @group(0) @binding(2) var<storage, read> matches: array<vec4<f32>>;
 // The surface maps in mesh uv (render/maps.rs), 1×1 placeholders where the scene has none
 // (frame.maps.x says which are real); read with textureLoad by `sample_map`.
@@ -257,6 +260,20 @@ fn dampened_specular(s: f32) -> f32 {
     return 0.0;
 }
 
+// specularity1_power: eq. 3.5's last term, (ψ_specularity1)^n.
+fn specularity1_power(specularity1: f32, n: f32) -> f32 {
+    return pow01(specularity1, n);
+}
+
+// uncoloured_specular: the last term, from the lobe of the strand's own tangent: the dampened
+// specular (eq. 3.6/3.7), or (ψ_specularity1)^n under eq. 3.5.
+fn uncoloured_specular(lobe: f32) -> f32 {
+    if (frame.lighting.x != 0.0) {
+        return specularity1_power(lobe, frame.lighting.y);
+    }
+    return dampened_specular(lobe);
+}
+
 // Eq. 3.7: A + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow,
 // each channel clamped to [0, 1]; A = ambient_term: w_a·ambient alone (eq. 3.7 as printed) or
 // times the strand colour.
@@ -423,6 +440,35 @@ fn light_spot_intensity(normal: vec3<f32>, spot_light_dir: vec3<f32>, exponent: 
     return pow01(dot(normalize_or_zero(normal), normalize_or_zero(spot_light_dir)), exponent);
 }
 
+// reach_falloff: (1 − d²/R²)² inside the reach, 0 beyond.
+fn reach_falloff(distance_squared: f32, reach: f32) -> f32 {
+    let q = distance_squared / (reach * reach);
+    if (q < 1.0 && reach > 0.0) {
+        let k = 1.0 - q;
+        return k * k;
+    }
+    return 0.0;
+}
+
+// point_light_cosine: n̂·o/√(o·o), o = light − point.
+fn point_light_cosine(unit_normal: vec3<f32>, offset: vec3<f32>) -> f32 {
+    let length_squared = dot(offset, offset);
+    if (length_squared > 0.0) {
+        return dot(unit_normal, offset) / sqrt(length_squared);
+    }
+    return 0.0;
+}
+
+// point_light_intensity: the lobe towards a light at a point, times its reach falloff.
+fn point_light_intensity(unit_normal: vec3<f32>, point: vec3<f32>, light: vec3<f32>, reach: f32, exponent: f32) -> f32 {
+    let offset = light - point;
+    let falloff = reach_falloff(dot(offset, offset), reach);
+    if (falloff == 0.0) {
+        return 0.0;
+    }
+    return pow01(point_light_cosine(unit_normal, offset), exponent) * falloff;
+}
+
 fn spot_gradient(intensity: f32, inner_threshold: f32, outer_threshold: f32) -> f32 {
     return ramp(intensity, outer_threshold, inner_threshold);
 }
@@ -469,6 +515,9 @@ fn apply_spots(fur_colour: vec3<f32>, object: vec3<f32>, normal: vec3<f32>) -> v
             weight = spot_gradient(lobe, b.w, c.w);
         } else if (head.x == 2.0) {
             weight = stripe_intensity(dot(object, a.xyz), a.w, b.w, c.w);
+        } else if (head.x == 4.0) {
+            let lobe = point_light_intensity(normalize_or_zero(normal), object, a.xyz, b.x, a.w);
+            weight = spot_gradient(lobe, b.w, c.w);
         } else {
             let lobe = light_spot_intensity(normal, a.xyz, a.w);
             weight = light_stripe_band(lobe, b.x, b.w, c.w);
@@ -701,21 +750,35 @@ fn burn_rule(intensity: f32, shell_index: u32, max_shell: u32) -> BurnOutcome {
     return BurnOutcome(CHARRED, 1.0 - i);
 }
 
-// BurnState::intensity: the strongest match lobe.
-fn burn_intensity(normal: vec3<f32>) -> f32 {
+// BurnState::intensity: the strongest match. The matches by direction take the lobe of their
+// largest cosine (one power); each match at a point its lobe times its reach falloff.
+fn burn_intensity(normal: vec3<f32>, point: vec3<f32>) -> f32 {
+    let unit_normal = normalize_or_zero(normal);
+    let exponent = frame.shading2.z;
     var strongest = 0.0;
+    var cosine = -2.0;
+    var directions = false;
     for (var m = 0u; m < frame.counts.w; m++) {
-        strongest = max(strongest, light_spot_intensity(normal, matches[m].xyz, frame.shading2.z));
+        let light = matches[m];
+        if (light.w == 0.0) {
+            cosine = max(cosine, dot(unit_normal, normalize_or_zero(light.xyz)));
+            directions = true;
+        } else {
+            strongest = max(strongest, point_light_intensity(unit_normal, point, light.xyz, light.w, exponent));
+        }
+    }
+    if (directions) {
+        strongest = max(strongest, pow01(cosine, exponent));
     }
     return strongest;
 }
 
-// ShadeParams::burn_outcome.
-fn burn_outcome(normal: vec3<f32>, index: u32, max_shell: u32) -> BurnOutcome {
+// ShadeParams::burn_outcome, at a surface point (object space, rest pose).
+fn burn_outcome(normal: vec3<f32>, point: vec3<f32>, index: u32, max_shell: u32) -> BurnOutcome {
     if (frame.shading2.w == 0.0) {
         return BurnOutcome(UNBURNT, 1.0);
     }
-    return burn_rule(burn_intensity(normal), index, max_shell);
+    return burn_rule(burn_intensity(normal, point), index, max_shell);
 }
 
 fn strand_colour_after_burn(b: BurnOutcome, strand_colour: vec3<f32>) -> vec3<f32> {
@@ -764,6 +827,7 @@ struct SkinVaryings {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) rest_normal: vec3<f32>,
+    @location(2) rest_position: vec3<f32>,
 }
 
 // The skin's vertex closure: the posed normal lights it, the rest normal meets the matches.
@@ -772,6 +836,7 @@ fn skin_vertex(v: MeshVertex) -> SkinVaryings {
     out.clip = frame.view_proj * vec4<f32>(v.position + frame.offset.xyz, 1.0);
     out.normal = v.normal;
     out.rest_normal = v.rest_normal;
+    out.rest_position = v.rest_position;
     return out;
 }
 
@@ -931,7 +996,7 @@ fn fs_skin(v: SkinVaryings) -> @location(0) vec4<f32> {
     }
     let n = normalize_or_zero(v.normal);
     let rest = normalize_or_zero(v.rest_normal);
-    let colour = strand_colour_after_burn(burn_outcome(rest, 0u, layer.max_shell), frame.skin_colour.xyz);
+    let colour = strand_colour_after_burn(burn_outcome(rest, v.rest_position, 0u, layer.max_shell), frame.skin_colour.xyz);
     return vec4<f32>(colour * (0.5 + 0.5 * max(dot(n, frame.light.xyz), 0.0)), 1.0);
 }
 
@@ -1079,7 +1144,7 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     let ddx = dpdxCoarse(v.uv);
     let ddy = dpdyCoarse(v.uv);
     // 1. Burning (3.4): a burnt texel is discarded before any texture read.
-    let burn = burn_outcome(v.normal, layer.index, layer.max_shell);
+    let burn = burn_outcome(v.normal, v.object, layer.index, layer.max_shell);
     if (burn.kind == BURNT) {
         discard;
     }
@@ -1146,12 +1211,13 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
         let g = clamp(1.0 - frame.weights2.x * shadow, 0.0, 1.0);
         return vec4<f32>(g, g, g, alpha);
     }
-    // 7. Kajiya–Kay (eq. 2.5, 2.7), the dampened specular (3.2.3), eq. 3.7.
+    // 7. Kajiya–Kay (eq. 2.5, 2.7), the uncoloured last term (the dampened specular of 3.2.3,
+    // or eq. 3.5's (ψ_specularity1)^n), eq. 3.7.
     let s = frame.shading;
     let diffuse = kajiya_kay_diffuse(tangent, light, s.y);
     let specular = specular_with_tangents(tangent, vec3<f32>(0.0, 0.0, 1.0), light, eye, s.z,
                                           frame.counts.x, frame.shading2.x);
-    let dampened = dampened_specular(kajiya_kay_specular(tangent, light, eye, s.w));
+    let dampened = uncoloured_specular(kajiya_kay_specular(tangent, light, eye, s.w));
     let colour = final_colour(strand, frame.light_colour.xyz, s.x, diffuse, specular, dampened, shadow);
     return vec4<f32>(colour, alpha);
 }

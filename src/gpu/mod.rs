@@ -499,12 +499,15 @@ impl GpuContext {
         });
         let shade = prepared.shade_params_at(time);
         let spots = storage_floats(shade.spots.iter().flat_map(spot_vec4s));
-        let matches = storage_floats(
-            shade
-                .burn
+        // A match as one vec4: a unit direction with w = 0, or a position with w = its reach.
+        let matches = storage_floats(shade.burn.iter().flat_map(|b| {
+            let directions = b.directions.iter().map(|m| m.extend(0.0).to_array());
+            let points = b
+                .points
                 .iter()
-                .flat_map(|b| b.matches.iter().map(|m| m.extend(0.0).to_array())),
-        );
+                .map(|m| m.position.extend(m.reach).to_array());
+            directions.chain(points)
+        }));
         let spot_buffer = self.storage(&spots, "spots");
         let match_buffer = self.storage(&matches, "matches");
         // The surface maps (read at level 0); a 1×1 placeholder for each absent one.
@@ -1586,6 +1589,22 @@ fn spot_vec4s(spot: &Spot) -> [[f32; 4]; 4] {
             Vec3::ZERO.extend(inner_threshold).to_array(),
             colour.extend(outer_threshold).to_array(),
         ],
+        Spot::PointLight {
+            position,
+            reach,
+            exponent,
+            inner_threshold,
+            outer_threshold,
+            colour,
+            ..
+        } => [
+            [4.0, 0.0, 0.0, 0.0],
+            position.extend(exponent).to_array(),
+            Vec3::new(reach, 0.0, 0.0)
+                .extend(inner_threshold)
+                .to_array(),
+            colour.extend(outer_threshold).to_array(),
+        ],
         Spot::LightStripe {
             direction,
             exponent,
@@ -1696,7 +1715,10 @@ pub fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
         DebugView::Alpha => 2,
         DebugView::Shadow => 3,
     };
-    let matches = shade.burn.as_ref().map_or(0, |b| b.matches.len()) as u32;
+    let matches = shade
+        .burn
+        .as_ref()
+        .map_or(0, |b| b.directions.len() + b.points.len()) as u32;
     for v in [tangents, debug, shade.spots.len() as u32, matches] {
         bytes.extend(v.to_le_bytes());
     }
@@ -1724,6 +1746,12 @@ pub fn frame_uniforms(prepared: &PreparedScene, time: f32) -> Vec<u8> {
     ] {
         bytes.extend(v.to_le_bytes());
     }
+    // The lighting equation (fur.wgsl's `uncoloured_specular`): eq. 3.5 and its n, or eq. 3.6.
+    let lighting = match shade.lighting {
+        crate::shading::LightingModel::Eq36 => Vec4::ZERO,
+        crate::shading::LightingModel::Eq35 { n } => Vec4::new(1.0, n, 0.0, 0.0),
+    };
+    bytes.extend(lighting.to_array().iter().flat_map(|c| c.to_le_bytes()));
     bytes
 }
 

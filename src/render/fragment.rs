@@ -25,8 +25,8 @@ use super::maps::SurfaceMaps;
 use crate::raster::texture::{MipLevel, PairedTexels, TrilinearPair, level_of_detail};
 use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
-    AmbientTermSetting, DebugView, Scene, ShadowTexelSetting, SpecularLobesSetting, SpotKind,
-    StripeKind,
+    AmbientTermSetting, DebugView, MatchSetting, PointMatch, Scene, ShadowTexelSetting,
+    SpecularLobesSetting, SpotKind, StripeKind,
 };
 use crate::shading::{
     self, AmbientTerm, BurnOutcome, ShadingWeights, ShadowTexel, SpecularLobes, SpecularTangents,
@@ -107,10 +107,11 @@ const UV: usize = component!(surface.uv);
 const WIND_UV: usize = component!(surface.wind_uv);
 const SHADOW: usize = component!(surface.shadow);
 const MESH_UV: usize = component!(surface.mesh_uv);
-const LENGTH: usize = component!(surface.length);
 const FADE: usize = component!(surface.fade);
 const NORMAL: usize = component!(surface.normal);
 const OBJECT: usize = component!(surface.object);
+#[cfg(test)]
+const LENGTH: usize = component!(surface.length);
 const LIGHT: usize = component!(lit.light);
 const EYE: usize = component!(lit.eye);
 const WIND: usize = component!(lit.wind);
@@ -162,6 +163,24 @@ pub enum Spot {
         /// `direction` normalised once more, as [`shading::light_spot_cosine`] normalises it, so
         /// that a fragment's cosine is the dot product with its unit normal.
         cosine_direction: Vec3,
+        /// Colour.
+        colour: Vec3,
+    },
+    /// The lobe of a light at a point fixed to the object, within its reach
+    /// ([`shading::point_light_intensity`]).
+    PointLight {
+        /// The light's position, object space.
+        position: Vec3,
+        /// Where it fades out ([`shading::reach_falloff`]).
+        reach: f32,
+        /// Lobe exponent.
+        exponent: f32,
+        /// Intensity of full colour.
+        inner_threshold: f32,
+        /// Intensity where the ring ends.
+        outer_threshold: f32,
+        /// Cosines below this give intensities under both thresholds for certain.
+        outside_below: f32,
         /// Colour.
         colour: Vec3,
     },
@@ -239,6 +258,30 @@ impl Spot {
                     shading::spot_gradient(lobe, inner_threshold, outer_threshold),
                 )
             }
+            Spot::PointLight {
+                position,
+                reach,
+                exponent,
+                inner_threshold,
+                outer_threshold,
+                outside_below,
+                colour,
+            } => {
+                // `shading::point_light_intensity`, the power skipped where the product is
+                // surely 0 or under both thresholds (the gradient is then what it is at 0).
+                let offset = position - object;
+                let falloff = shading::reach_falloff(offset.dot(offset), reach);
+                let cosine = shading::point_light_cosine(unit_normal, offset);
+                let intensity = if falloff > 0.0 && cosine >= outside_below {
+                    shading::light_spot_lobe(cosine, exponent) * falloff
+                } else {
+                    0.0
+                };
+                (
+                    colour,
+                    shading::spot_gradient(intensity, inner_threshold, outer_threshold),
+                )
+            }
             Spot::LightStripe {
                 cosine_direction,
                 exponent,
@@ -311,10 +354,12 @@ impl Spot {
                 }
                 weight
             }
-            Spot::LightStripe { .. } | Spot::Stripe { .. } => std::array::from_fn(|i| {
-                self.weight_at_unit_normal(object.lane(i), unit_normal.lane(i))
-                    .1
-            }),
+            Spot::PointLight { .. } | Spot::LightStripe { .. } | Spot::Stripe { .. } => {
+                std::array::from_fn(|i| {
+                    self.weight_at_unit_normal(object.lane(i), unit_normal.lane(i))
+                        .1
+                })
+            }
         }
     }
 
@@ -324,6 +369,7 @@ impl Spot {
         match *self {
             Spot::Ellipsoid { colour, .. }
             | Spot::Light { colour, .. }
+            | Spot::PointLight { colour, .. }
             | Spot::LightStripe { colour, .. }
             | Spot::Stripe { colour, .. } => colour,
         }
@@ -333,11 +379,13 @@ impl Spot {
 /// The burn state of a frame: the matches and their current exponent.
 #[derive(Clone, Debug)]
 pub struct BurnState {
-    /// Unit directions of the matches, object space.
-    pub matches: Vec<Vec3>,
-    /// `matches` normalised once more, as [`shading::light_spot_cosine`] normalises them, so
-    /// that a fragment's cosine is the dot product with its unit normal.
-    pub cosine_matches: Vec<Vec3>,
+    /// Unit directions of the matches given by direction, object space.
+    pub directions: Vec<Vec3>,
+    /// `directions` normalised once more, as [`shading::light_spot_cosine`] normalises them,
+    /// so that a fragment's cosine is the dot product with its unit normal.
+    pub cosine_directions: Vec<Vec3>,
+    /// The matches at points, object space.
+    pub points: Vec<PointMatch>,
     /// The lobe exponent at this instant.
     pub exponent: f32,
     /// Cosines below this give intensities under the burn threshold for certain.
@@ -347,6 +395,7 @@ pub struct BurnState {
 impl BurnState {
     /// Whether every fragment of a triangle with these vertex normals is surely burnt away on
     /// shell `layer` of `max_shell` (so the triangle can be skipped without changing a pixel).
+    /// Only matches given by direction are bounded; matches at points never skip a triangle.
     ///
     /// Why it is safe: a fragment's normal is the renormalised convex combination of the vertex
     /// normals, whose length is at most 1, so its dot with a match `m` is at least the smallest
@@ -358,7 +407,7 @@ impl BurnState {
             return false;
         }
         let needed = 0.1f32.max(1.0 - layer as f32 / max_shell as f32) + 1.0e-3;
-        self.matches.iter().any(|&m| {
+        self.directions.iter().any(|&m| {
             let c = normals
                 .iter()
                 .map(|n| n.normalize_or_zero().dot(m))
@@ -368,28 +417,96 @@ impl BurnState {
         })
     }
 
-    /// The spot intensity `I` of thesis 3.4: the strongest match lobe at this normal. Lobes
-    /// surely under the burn threshold count as 0: the burn rule treats both alike.
+    /// The spot intensity `I` of thesis 3.4 at a surface point (object space, rest pose) with
+    /// this normal: the strongest match. Intensities surely under the burn threshold count as
+    /// 0: the burn rule treats both alike.
+    ///
+    /// The matches given by direction take the lobe of their largest cosine, one power for
+    /// all of them: `max(c₁, c₂, …)^e`, the lobe of the match the normal faces most
+    /// (numeric conventions, "The burn's strongest match"). Each match at a point adds its
+    /// [`shading::point_light_intensity`], its power taken only inside its reach.
     #[inline]
-    pub fn intensity(&self, normal: Vec3) -> f32 {
-        self.intensity_at_unit_normal(normal.normalize_or_zero())
+    pub fn intensity(&self, normal: Vec3, point: Vec3) -> f32 {
+        self.intensity_at_unit_normal(normal.normalize_or_zero(), point)
     }
 
     /// [`BurnState::intensity`] with the normal already normalised (`normal.normalize_or_zero()`).
     #[inline]
-    pub fn intensity_at_unit_normal(&self, unit_normal: Vec3) -> f32 {
-        self.cosine_matches
-            .iter()
-            .map(|&m| {
-                // `shading::light_spot_cosine(normal, m)`, both normalisations done.
-                let cosine = unit_normal.dot(m);
-                if cosine < self.unburnt_below {
-                    0.0
-                } else {
-                    shading::light_spot_lobe(cosine, self.exponent)
+    pub fn intensity_at_unit_normal(&self, unit_normal: Vec3, point: Vec3) -> f32 {
+        let mut strongest = 0.0f32;
+        if !self.cosine_directions.is_empty() {
+            // `shading::light_spot_cosine(normal, m)`, both normalisations done.
+            let cosine = self
+                .cosine_directions
+                .iter()
+                .map(|&m| unit_normal.dot(m))
+                .fold(f32::NEG_INFINITY, f32::max);
+            if cosine >= self.unburnt_below {
+                strongest = shading::light_spot_lobe(cosine, self.exponent);
+            }
+        }
+        for m in &self.points {
+            let offset = m.position - point;
+            let falloff = shading::reach_falloff(offset.dot(offset), m.reach);
+            if falloff > 0.0 {
+                let cosine = shading::point_light_cosine(unit_normal, offset);
+                if cosine >= self.unburnt_below {
+                    strongest =
+                        strongest.max(shading::light_spot_lobe(cosine, self.exponent) * falloff);
                 }
-            })
-            .fold(0.0, f32::max)
+            }
+        }
+        strongest
+    }
+
+    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits: the
+    /// cosines and their largest as plain loops over the lanes, the one power of the matches
+    /// by direction for all lanes at once ([`shading::light_spot_lobe_lanes`], skipped where
+    /// every lane is surely under the threshold), the matches at points lane by lane.
+    #[inline]
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    pub fn intensity_lanes<const N: usize>(
+        &self,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+    ) -> [f32; N] {
+        let mut strongest = [0.0f32; N];
+        if !self.cosine_directions.is_empty() {
+            let mut cosine = [f32::NEG_INFINITY; N];
+            for &m in &self.cosine_directions {
+                let dot = unit_normals.dot(&Vec3xN::splat(m));
+                for i in 0..N {
+                    cosine[i] = cosine[i].max(dot[i]);
+                }
+            }
+            if cosine.iter().any(|&c| c >= self.unburnt_below) {
+                let lobe = shading::light_spot_lobe_lanes(cosine, self.exponent);
+                for i in 0..N {
+                    strongest[i] = if cosine[i] >= self.unburnt_below {
+                        lobe[i]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+        if !self.points.is_empty() {
+            for i in 0..N {
+                let (unit_normal, point) = (unit_normals.lane(i), points.lane(i));
+                for m in &self.points {
+                    let offset = m.position - point;
+                    let falloff = shading::reach_falloff(offset.dot(offset), m.reach);
+                    if falloff > 0.0 {
+                        let cosine = shading::point_light_cosine(unit_normal, offset);
+                        if cosine >= self.unburnt_below {
+                            strongest[i] = strongest[i]
+                                .max(shading::light_spot_lobe(cosine, self.exponent) * falloff);
+                        }
+                    }
+                }
+            }
+        }
+        strongest
     }
 }
 
@@ -400,8 +517,11 @@ pub struct ShadeParams {
     pub light_colour: Vec3,
     /// Ambient level.
     pub ambient: f32,
-    /// Exponents of the diffuse, specular and dampened specular terms.
+    /// Exponents of the diffuse, specular and the uncoloured last term's lobe (the dampened
+    /// exponent, or under eq. 3.5 the specular exponent: [`shading::LightingModel::lobe_exponent`]).
     pub exponents: shading::LightingExponents,
+    /// The lighting equation: what the uncoloured last term is (eq. 3.6/3.7 or eq. 3.5).
+    pub lighting: shading::LightingModel,
     /// One or three tangents (and how three combine).
     pub tangents: SpecularTangents,
     /// Where `ψ_ambient` of eq. 3.7 stands.
@@ -447,14 +567,26 @@ impl ShadeParams {
         let mut spots: Vec<Spot> = s
             .spots
             .iter()
-            .map(|spot| match spot.kind {
-                SpotKind::Ellipsoid => Spot::Ellipsoid {
+            .map(|spot| match (spot.kind, spot.position.zip(spot.reach)) {
+                (SpotKind::Ellipsoid, _) => Spot::Ellipsoid {
                     centre: spot.centre,
                     radii: spot.radii,
                     inner: spot.inner,
                     colour: spot.colour,
                 },
-                SpotKind::Light => Spot::Light {
+                (SpotKind::Light, Some((position, reach))) => Spot::PointLight {
+                    position,
+                    reach,
+                    exponent: spot.exponent,
+                    inner_threshold: spot.inner_threshold,
+                    outer_threshold: spot.outer_threshold,
+                    outside_below: shading::light_spot_cosine_below(
+                        spot.inner_threshold.min(spot.outer_threshold),
+                        spot.exponent,
+                    ),
+                    colour: spot.colour,
+                },
+                (SpotKind::Light, None) => Spot::Light {
                     direction: spot.direction.normalize_or_zero(),
                     cosine_direction: spot.direction.normalize_or_zero().normalize_or_zero(),
                     exponent: spot.exponent,
@@ -494,10 +626,25 @@ impl ShadeParams {
                 spread_duration: b.spread_duration,
             };
             shading::burn_exponent(time, &schedule).map(|exponent| {
-                let matches: Vec<Vec3> = b.matches.iter().map(|m| m.normalize_or_zero()).collect();
+                let directions: Vec<Vec3> = b
+                    .matches
+                    .iter()
+                    .filter_map(|m| match m {
+                        MatchSetting::Direction(d) => Some(d.normalize_or_zero()),
+                        MatchSetting::Point(_) => None,
+                    })
+                    .collect();
                 BurnState {
-                    cosine_matches: matches.iter().map(|m| m.normalize_or_zero()).collect(),
-                    matches,
+                    cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
+                    directions,
+                    points: b
+                        .matches
+                        .iter()
+                        .filter_map(|m| match m {
+                            MatchSetting::Point(p) => Some(*p),
+                            MatchSetting::Direction(_) => None,
+                        })
+                        .collect(),
                     exponent,
                     unburnt_below: shading::light_spot_cosine_below(
                         shading::BURN_THRESHOLD,
@@ -506,14 +653,22 @@ impl ShadeParams {
                 }
             })
         });
+        let lighting = match s.shading.lighting {
+            crate::scene::LightingSetting::Eq36 => shading::LightingModel::Eq36,
+            crate::scene::LightingSetting::Eq35 => shading::LightingModel::Eq35 {
+                n: s.shading.specular1_exponent,
+            },
+        };
         ShadeParams {
             light_colour: s.light.colour,
             ambient: s.shading.ambient,
             exponents: shading::LightingExponents {
                 banks: s.shading.banks_exponent,
                 specular: s.shading.specular_exponent,
-                dampened: s.shading.dampened_exponent,
+                dampened: lighting
+                    .lobe_exponent(s.shading.specular_exponent, s.shading.dampened_exponent),
             },
+            lighting,
             tangents: if s.shading.specular_tangents == 3 {
                 SpecularTangents::Three(match s.shading.specular_lobes {
                     SpecularLobesSetting::Sum => SpecularLobes::Sum,
@@ -546,10 +701,11 @@ impl ShadeParams {
         }
     }
 
-    /// The burn outcome for a layer at this normal (Unburnt when nothing burns).
+    /// The burn outcome for a layer at a surface point (object space, rest pose) with this
+    /// normal (Unburnt when nothing burns).
     #[inline]
-    pub fn burn_outcome(&self, normal: Vec3, layer: &LayerParams) -> BurnOutcome {
-        self.burn_outcome_at_unit_normal(normal.normalize_or_zero(), layer)
+    pub fn burn_outcome(&self, normal: Vec3, point: Vec3, layer: &LayerParams) -> BurnOutcome {
+        self.burn_outcome_at_unit_normal(normal.normalize_or_zero(), point, layer)
     }
 
     /// [`ShadeParams::burn_outcome`] with the normal already normalised.
@@ -557,11 +713,12 @@ impl ShadeParams {
     pub fn burn_outcome_at_unit_normal(
         &self,
         unit_normal: Vec3,
+        point: Vec3,
         layer: &LayerParams,
     ) -> BurnOutcome {
         match &self.burn {
             Some(b) => shading::burn_rule(
-                b.intensity_at_unit_normal(unit_normal),
+                b.intensity_at_unit_normal(unit_normal, point),
                 layer.index,
                 layer.max_shell,
             ),
@@ -669,6 +826,10 @@ pub fn shade_fur_quad<'a, const N: usize>(
     p: &ShadeParams,
     mut write: impl FnMut(PixelSlot, Vec4),
 ) {
+    let entry = quad_entry(quad, &mut slots, textures, maps, layer, p);
+    if slots.lanes() == 0 {
+        return;
+    }
     // The level of detail reads the uv of lanes 0–2 (helper lanes too).
     let uv = |lane: usize| quad.field(lane, |v| &v.surface.uv);
     let origin = uv(0);
@@ -731,7 +892,9 @@ pub fn shade_fur_quad<'a, const N: usize>(
             lanes[at.clone()].copy_from_slice(quad_lanes);
         }
         batch.lod[at.clone()].fill(lod);
-        batch.frac[at].fill(frac);
+        batch.frac[at.clone()].fill(frac);
+        batch.char_factor[at].copy_from_slice(&entry.char_factor);
+        batch.charred |= entry.charred << i;
         batch.len += 4;
         return;
     }
@@ -749,8 +912,105 @@ pub fn shade_fur_quad<'a, const N: usize>(
         }
         batch.lod[i] = lod;
         batch.frac[i] = frac;
+        batch.char_factor[i] = entry.char_factor[lane];
+        batch.charred |= ((entry.charred >> lane) & 1) << i;
         batch.len += 1;
     }
+}
+
+/// What step 1 of the fur stage found for a quad's lanes as they joined a batch.
+struct QuadEntry {
+    /// Bit l: lane l is charred.
+    charred: u32,
+    /// Lane l's factor on the strand colour where charred.
+    char_factor: [f32; 4],
+}
+
+/// Step 1 of the fur stage for one quad's lanes, before they take lanes of a batch (the scalar
+/// twin's order: before any texture read): lanes burnt away on this layer, and shell lanes
+/// above the painted length, are discarded here, so that a burnt or bare region costs this test
+/// alone and the batches stay full of lanes the image shows. Charred lanes are marked.
+#[inline(always)]
+fn quad_entry(
+    quad: &Quad<'_, FurVaryings>,
+    slots: &mut QuadSlots,
+    textures: LayerMaps<'_>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> QuadEntry {
+    let length_map = maps.length.as_ref().filter(|_| textures.shell);
+    if p.burn.is_none() && length_map.is_none() {
+        return QuadEntry {
+            charred: 0,
+            char_factor: [1.0; 4],
+        };
+    }
+    quad_entry_lanes(quad, slots, length_map, maps, layer, p)
+}
+
+/// [`quad_entry`]'s work where something burns or a length map cuts shells: kept out of the
+/// hot path's inlined code, which every frame without them runs.
+#[inline(never)]
+fn quad_entry_lanes(
+    quad: &Quad<'_, FurVaryings>,
+    slots: &mut QuadSlots,
+    length_map: Option<&Texture>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> QuadEntry {
+    let mut entry = QuadEntry {
+        charred: 0,
+        char_factor: [1.0; 4],
+    };
+    // The burn's intensity of the four lanes at once (helper lanes too; their result is
+    // dropped).
+    let intensity = p.burn.as_ref().map(|b| {
+        let mut unit_normals = Vec3xN::<4>::default();
+        let mut objects = Vec3xN::<4>::default();
+        for lane in 0..4 {
+            let n = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
+            let o = quad.field(lane, |v| &v.surface.object);
+            (
+                unit_normals.x[lane],
+                unit_normals.y[lane],
+                unit_normals.z[lane],
+            ) = n.into();
+            (objects.x[lane], objects.y[lane], objects.z[lane]) = o.into();
+        }
+        b.intensity_lanes(&unit_normals, &objects)
+    });
+    for lane in 0..4 {
+        if slots.lanes() & (1 << lane) == 0 {
+            continue;
+        }
+        let mut shown = true;
+        if let Some(intensity) = intensity {
+            // `ShadeParams::burn_outcome_at_unit_normal`, its intensity found above.
+            match shading::burn_rule(intensity[lane], layer.index, layer.max_shell) {
+                BurnOutcome::Burnt => shown = false,
+                BurnOutcome::Charred { colour_factor } => {
+                    entry.charred |= 1 << lane;
+                    entry.char_factor[lane] = colour_factor;
+                }
+                BurnOutcome::Unburnt => {}
+            }
+        }
+        if shown && let Some(length_map) = length_map {
+            shown = shading::layer_within_length(
+                layer.height_fraction,
+                quad.field(lane, |v| &v.surface.length),
+                maps.sample(length_map, quad.field(lane, |v| &v.surface.mesh_uv))
+                    .x,
+            );
+        }
+        if !shown {
+            // Discarded: its slot is never written.
+            let _ = slots.take(lane);
+        }
+    }
+    entry
 }
 
 /// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
@@ -790,6 +1050,10 @@ pub struct FurBatch<'a, const N: usize> {
     lod: [f32; N],
     /// Each lane's blend fraction between the pair's levels.
     frac: [f32; N],
+    /// Bit i: lane i is charred by the burn (found when its quad joined).
+    charred: u32,
+    /// Each charred lane's factor on the strand colour.
+    char_factor: [f32; N],
 }
 
 impl<const N: usize> Default for FurBatch<'_, N> {
@@ -805,6 +1069,8 @@ impl<const N: usize> Default for FurBatch<'_, N> {
             varyings: BatchVaryings::default(),
             lod: [0.0; N],
             frac: [0.0; N],
+            charred: 0,
+            char_factor: [0.0; N],
         }
     }
 }
@@ -897,7 +1163,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         }
         self.len = 0;
         // Lanes still alive: bit i for lane i.
-        let mut alive = (1u32 << len) - 1;
+        let alive = (1u32 << len) - 1;
         let varyings = &self.varyings;
         let sampler = textures.sampler;
         // Step 2: the texel that lands here is read at uv − wind_uv.
@@ -907,36 +1173,10 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             (u[i], v[i]) = (uv_u[i] - wind_uv[0][i], uv_v[i] - wind_uv[1][i]);
         }
         let mesh_uv = |i: usize, [u, v]: &[[f32; N]; 2]| Vec2::new(u[i], v[i]);
-        // Step 1: the burn (lane by lane; its charring waits for the spots).
-        let mut charred = 0u32;
-        let mut char_factor = [1.0f32; N];
-        if p.burn.is_some() {
-            let unit_normals = varyings.vec3(NORMAL).normalize_or_zero();
-            for i in 0..len {
-                match p.burn_outcome_at_unit_normal(unit_normals.lane(i), layer) {
-                    BurnOutcome::Burnt => alive &= !(1 << i),
-                    BurnOutcome::Charred { colour_factor } => {
-                        charred |= 1 << i;
-                        char_factor[i] = colour_factor;
-                    }
-                    BurnOutcome::Unburnt => {}
-                }
-            }
-        }
-        if textures.shell
-            && let Some(length_map) = &maps.length
-        {
-            let (length, at) = (varyings.component(LENGTH), varyings.vec2(MESH_UV));
-            for i in 0..len {
-                if !shading::layer_within_length(
-                    layer.height_fraction,
-                    length[i],
-                    maps.sample(length_map, mesh_uv(i, &at)).x,
-                ) {
-                    alive &= !(1 << i);
-                }
-            }
-        }
+        // Step 1 ran as each quad joined (`quad_entry`): the lanes held are not burnt away nor
+        // above the painted length; the charred ones are marked.
+        let (charred, char_factor) = (self.charred, self.char_factor);
+        self.charred = 0;
         // Step 3: the colour and tangent maps.
         let texels = match &self.pair {
             Some(pair) => pair.sample_lanes(&u, &v, &self.frac),
@@ -1139,7 +1379,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             p.ambient,
             lighting.diffuse,
             lighting.specular,
-            shading::dampened_specular_lanes(lighting.specular_to_dampen),
+            shading::uncoloured_specular_lanes(lighting.specular_to_dampen, p.lighting),
             shadow,
             &p.weights,
             p.ambient_term,
@@ -1315,10 +1555,11 @@ impl LitSurface {
         lit_tangent(self.encoded_tangent, v.wind, v.lean, layer, p)
     }
 
-    /// The dampened specular (3.2.3) and eq. 3.7, with this fragment's alpha.
+    /// The uncoloured last term (the dampened specular of 3.2.3, or eq. 3.5's
+    /// `(ψ_specularity1)^n`) and eq. 3.7, with this fragment's alpha.
     #[inline(always)]
     fn colour(&self, lighting: shading::StrandLighting, p: &ShadeParams) -> Vec4 {
-        let dampened = shading::dampened_specular(lighting.specular_to_dampen);
+        let dampened = shading::uncoloured_specular(lighting.specular_to_dampen, p.lighting);
         shading::final_colour(
             self.strand,
             p.light_colour,
@@ -1369,7 +1610,7 @@ fn surface(
     layer: &LayerParams,
     p: &ShadeParams,
 ) -> Surface {
-    let burn = p.burn_outcome_at_unit_normal(unit_normal, layer);
+    let burn = p.burn_outcome_at_unit_normal(unit_normal, v.object, layer);
     if burn == BurnOutcome::Burnt {
         return Surface::Discarded;
     }
@@ -1609,6 +1850,84 @@ mod tests {
     }
 
     #[test]
+    fn burn_intensity_lanes_are_the_scalar_intensity_bit_for_bit() {
+        let mut rng = Lcg::new(57);
+        for round in 0..200 {
+            let directions: Vec<Vec3> = (0..round % 7)
+                .map(|_| rng.cube().normalize_or_zero())
+                .collect();
+            let points: Vec<PointMatch> = (0..round % 3)
+                .map(|_| PointMatch {
+                    position: rng.cube() * 3.0,
+                    reach: rng.range(0.5, 6.0),
+                })
+                .collect();
+            let exponent = rng.range(0.5, 400.0);
+            let burn = BurnState {
+                cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
+                directions,
+                points,
+                exponent,
+                unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
+            };
+            let mut normals = Vec3xN::<4>::default();
+            let mut objects = Vec3xN::<4>::default();
+            for i in 0..4 {
+                let n = rng.cube().normalize_or_zero();
+                let o = rng.cube() * 3.0;
+                (normals.x[i], normals.y[i], normals.z[i]) = n.into();
+                (objects.x[i], objects.y[i], objects.z[i]) = o.into();
+            }
+            let lanes = burn.intensity_lanes(&normals, &objects);
+            for (i, lane) in lanes.iter().enumerate() {
+                let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
+                assert_eq!(lane.to_bits(), scalar.to_bits(), "round {round} lane {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_match_at_a_point_burns_one_region_of_a_torus_where_a_direction_burns_two() {
+        // A torus of radii 6 and 2.4 in the xz plane: the outer equator at +x and the inner wall
+        // at −x both face +x.
+        let (outer, inner) = (Vec3::new(8.4, 0.0, 0.0), Vec3::new(-3.6, 0.0, 0.0));
+        let burn = |directions: Vec<Vec3>, points: Vec<PointMatch>| BurnState {
+            cosine_directions: directions.clone(),
+            directions,
+            points,
+            exponent: 6.0,
+            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 6.0),
+        };
+        let by_direction = burn(vec![Vec3::X], vec![]);
+        assert_eq!(by_direction.intensity(Vec3::X, outer), 1.0);
+        assert_eq!(by_direction.intensity(Vec3::X, inner), 1.0);
+        let at_point = burn(
+            vec![],
+            vec![PointMatch {
+                position: outer + Vec3::X * 2.0,
+                reach: 6.0,
+            }],
+        );
+        let under = at_point.intensity(Vec3::X, outer);
+        assert!(
+            (under - (1.0f32 - 4.0 / 36.0).powi(2)).abs() < 1e-6,
+            "{under}"
+        );
+        assert_eq!(at_point.intensity(Vec3::X, inner), 0.0);
+        // Beside the match on the same surface the burn is weaker, and it spreads as the
+        // exponent falls.
+        let normal = Vec3::new(1.0, 0.0, 0.3).normalize();
+        let beside = outer + Vec3::new(-0.1, 0.0, 1.0);
+        assert!(at_point.intensity(normal, beside) < under);
+        let wider = BurnState {
+            exponent: 2.0,
+            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 2.0),
+            ..at_point.clone()
+        };
+        assert!(wider.intensity(normal, beside) > at_point.intensity(normal, beside));
+    }
+
+    #[test]
     fn spots_and_burn_with_the_unit_normal_equal_the_plain_formulas() {
         let mut rng = Lcg::new(23);
         let direction = Vec3::new(0.3, 0.8, -0.5).normalize_or_zero();
@@ -1622,13 +1941,21 @@ mod tests {
             colour: Vec3::ONE,
         };
         let matches: Vec<Vec3> = (0..6).map(|_| rng.cube().normalize_or_zero()).collect();
+        let points: Vec<PointMatch> = (0..3)
+            .map(|_| PointMatch {
+                position: rng.cube() * 2.0,
+                reach: rng.range(0.5, 3.0),
+            })
+            .collect();
         let burn = BurnState {
-            cosine_matches: matches.iter().map(|m| m.normalize_or_zero()).collect(),
-            matches: matches.clone(),
+            cosine_directions: matches.iter().map(|m| m.normalize_or_zero()).collect(),
+            directions: matches.clone(),
+            points: points.clone(),
             exponent: 7.5,
             unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 7.5),
         };
         for normal in normals(&mut rng) {
+            let point = rng.cube() * 2.0;
             // The plain statement: light_spot_cosine normalises both vectors itself.
             let cosine = shading::light_spot_cosine(normal, direction);
             let lobe = shading::light_spot_lobe(cosine, 20.0);
@@ -1639,18 +1966,32 @@ mod tests {
                 spot.weight_at(Vec3::ZERO, normal).1.to_bits(),
                 weight.to_bits()
             );
-            let intensity = matches
+            // The matches by direction: the lobe of the largest cosine; at points, each its
+            // point light intensity.
+            let largest = matches
                 .iter()
-                .map(|&m| shading::light_spot_lobe(shading::light_spot_cosine(normal, m), 7.5))
-                .fold(0.0f32, f32::max);
-            let got = burn.intensity_at_unit_normal(normal.normalize_or_zero());
+                .map(|&m| shading::light_spot_cosine(normal, m))
+                .fold(f32::NEG_INFINITY, f32::max);
+            let intensity = points
+                .iter()
+                .map(|m| {
+                    shading::point_light_intensity(
+                        normal.normalize_or_zero(),
+                        point,
+                        m.position,
+                        m.reach,
+                        7.5,
+                    )
+                })
+                .fold(shading::light_spot_lobe(largest, 7.5), f32::max);
+            let got = burn.intensity_at_unit_normal(normal.normalize_or_zero(), point);
             // Lobes surely under the threshold count as 0, so they agree where it matters.
             let burnt = |i: f32| i >= shading::BURN_THRESHOLD;
             assert_eq!(burnt(got), burnt(intensity), "{normal}");
             if burnt(intensity) {
                 assert_eq!(got.to_bits(), intensity.to_bits(), "{normal}");
             }
-            assert_eq!(burn.intensity(normal).to_bits(), got.to_bits());
+            assert_eq!(burn.intensity(normal, point).to_bits(), got.to_bits());
         }
     }
 }

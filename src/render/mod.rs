@@ -992,18 +992,19 @@ impl PreparedScene {
             },
             |v: &mesh::Vertex| ClipVertex {
                 position: view_proj * place(v.position).extend(1.0),
-                // The normal as posed lights the skin; the rest normal meets the matches, which
-                // are fixed to the object (the same vector for a mesh that is not posed).
-                varyings: (v.normal, v.rest_normal),
+                // The normal as posed lights the skin; the rest normal and position meet the
+                // matches, which are fixed to the object (the same vectors for a mesh that is
+                // not posed).
+                varyings: (v.normal, v.rest_normal, v.rest_position),
             },
             move |f| {
                 if debug {
                     return Some(Vec4::new(0.0, 0.0, 0.0, 1.0));
                 }
-                let (posed, rest) = *f.varyings();
+                let (posed, rest, rest_position) = *f.varyings();
                 let n = posed.normalize_or_zero();
                 let colour = shade
-                    .burn_outcome(rest.normalize_or_zero(), &skin_layer)
+                    .burn_outcome(rest.normalize_or_zero(), rest_position, &skin_layer)
                     .strand_colour(skin_colour);
                 Some((colour * (0.5 + 0.5 * n.dot(light).max(0.0))).extend(1.0))
             },

@@ -399,6 +399,20 @@ pub enum AmbientTermSetting {
     Strand,
 }
 
+/// Which equation of thesis 3.2.3 lights the fur ([`crate::shading::LightingModel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
+pub enum LightingSetting {
+    /// Eq. 3.6 with the shadow of eq. 3.7: the dampened specular as the uncoloured last term;
+    /// the default.
+    #[default]
+    #[serde(rename = "eq-3.6")]
+    Eq36,
+    /// Eq. 3.5: `(ψ_specularity1)^n` as the uncoloured last term, `n` =
+    /// `shading.specular1_exponent` (thesis figure 3.13).
+    #[serde(rename = "eq-3.5")]
+    Eq35,
+}
+
 /// What one shell-shadow lookup adds (thesis 3.2.2; [`crate::shading::ShadowTexel`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -448,8 +462,12 @@ pub struct ShadingSettings {
     pub banks_exponent: f32,
     /// Kajiya–Kay specular exponent.
     pub specular_exponent: f32,
-    /// The low exponent of the dampened specular.
+    /// The low exponent of the dampened specular (eq. 3.6/3.7).
     pub dampened_exponent: f32,
+    /// The lighting equation: eq. 3.6/3.7 (dampened specular) or eq. 3.5.
+    pub lighting: LightingSetting,
+    /// `n` of eq. 3.5's `(ψ_specularity1)^n` (with `lighting = "eq-3.5"`).
+    pub specular1_exponent: f32,
     /// 1 or 3 specular tangents (Scheuermann).
     pub specular_tangents: u32,
     /// With 3 tangents: the sum (thesis) or the mean of the three lobes.
@@ -475,6 +493,8 @@ impl Default for ShadingSettings {
             banks_exponent: 4.8,
             specular_exponent: 24.0,
             dampened_exponent: 4.0,
+            lighting: LightingSetting::default(),
+            specular1_exponent: 1.0,
             specular_tangents: 1,
             specular_lobes: SpecularLobesSetting::default(),
             ambient_term: AmbientTermSetting::default(),
@@ -533,6 +553,14 @@ pub struct SpotSettings {
     pub inner: f32,
     /// Light: direction of the light fixed to the object.
     pub direction: Vec3,
+    /// Light: the light's position instead of a direction, object space (on or a little above
+    /// the surface): the lobe then follows the direction towards it, and `reach` bounds it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<Vec3>,
+    /// Light at a `position`: the distance (object units) at which it fades out
+    /// ([`crate::shading::reach_falloff`]); required with `position`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reach: Option<f32>,
     /// Light: exponent of the lobe (larger is smaller).
     pub exponent: f32,
     /// Light: lobe intensity from which the colour is full.
@@ -550,6 +578,8 @@ impl Default for SpotSettings {
             radii: Vec3::ONE,
             inner: 0.6,
             direction: Vec3::Y,
+            position: None,
+            reach: None,
             exponent: 20.0,
             inner_threshold: 0.7,
             outer_threshold: 0.3,
@@ -722,8 +752,9 @@ impl Default for WindSettings {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BurnSettings {
-    /// Direction of each match from the object's centre (object space).
-    pub matches: Vec<Vec3>,
+    /// The matches: each a direction from the object's centre, or a point with a reach
+    /// (object space).
+    pub matches: Vec<MatchSetting>,
     /// When the matches light, seconds.
     pub start: f32,
     /// Exponent right after `start`: only the area nearest the match burns.
@@ -737,12 +768,66 @@ pub struct BurnSettings {
 impl Default for BurnSettings {
     fn default() -> Self {
         BurnSettings {
-            matches: vec![Vec3::Y],
+            matches: vec![MatchSetting::Direction(Vec3::Y)],
             start: 0.0,
             high_exponent: 200.0,
             low_exponent: 4.0,
             spread_duration: 10.0,
         }
+    }
+}
+
+/// One match of `[burn] matches`: `[x, y, z]`, a light fixed to the object by direction (the
+/// thesis's lobe of the normal alone, which on a torus also burns the inner wall facing the
+/// same way), or `{ position = [x, y, z], reach = r }`, a light at a point on or a little above
+/// the surface whose lobe follows the direction towards it and fades out by `reach`
+/// ([`crate::shading::point_light_intensity`]), so that one match burns one region.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum MatchSetting {
+    /// Towards this direction (object space).
+    Direction(Vec3),
+    /// At this point.
+    Point(PointMatch),
+}
+
+/// A match at a point: `{ position = [x, y, z], reach = r }`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointMatch {
+    /// Where the match is held, object space (a little above the surface, so that the fur
+    /// straight under it faces it).
+    pub position: Vec3,
+    /// The distance at which its light fades out (object units).
+    pub reach: f32,
+}
+
+impl<'de> Deserialize<'de> for MatchSetting {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct MatchVisitor;
+        impl<'de> serde::de::Visitor<'de> for MatchVisitor {
+            type Value = MatchSetting;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(
+                    "a match: a direction [x, y, z] or a point { position = [x, y, z], reach = r }",
+                )
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<Self::Value, A::Error> {
+                Vec3::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+                    .map(MatchSetting::Direction)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<Self::Value, A::Error> {
+                PointMatch::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(MatchSetting::Point)
+            }
+        }
+        deserializer.deserialize_any(MatchVisitor)
     }
 }
 
@@ -1136,12 +1221,25 @@ mod serialise_tests {
         scene.wind = Some(WindSettings::default());
         scene.burn = Some(BurnSettings {
             start: 0.1 + 0.2,
+            matches: vec![
+                MatchSetting::Direction(Vec3::new(0.1, 1.0, -1.0 / 3.0)),
+                MatchSetting::Point(PointMatch {
+                    position: Vec3::new(1.0 / 7.0, 2.5, -6.0),
+                    reach: 0.1 + 0.2,
+                }),
+            ],
             ..BurnSettings::default()
         });
         scene.spots = vec![
             SpotSettings::default(),
             SpotSettings {
                 kind: SpotKind::Light,
+                ..SpotSettings::default()
+            },
+            SpotSettings {
+                kind: SpotKind::Light,
+                position: Some(Vec3::new(0.0, 2.0 / 3.0, 6.1)),
+                reach: Some(2.0 / 3.0),
                 ..SpotSettings::default()
             },
         ];

@@ -93,6 +93,42 @@ fn colour(key: &str, v: Vec3) -> Result<(), Failure> {
 
 /// A direction: finite, and normalisable in f32 (its squared length neither overflows nor
 /// underflows to 0), since every user of it normalises it first and would silently get zero.
+/// The largest coordinate of a light's position and the largest reach: their squares and the
+/// squared distances of the fragment stage stay far inside f32.
+const MAX_LIGHT_COORDINATE: f32 = 1.0e6;
+
+/// A spot light or match at a point: a finite position within [`MAX_LIGHT_COORDINATE`] and a
+/// positive reach.
+/// Errors are reported at `line_key`'s line (a `[[spots]]` key, or the `matches` line for a
+/// match given inline).
+fn point_light(
+    line_key: &str,
+    position_key: &str,
+    position: Vec3,
+    reach_key: &str,
+    reach: f32,
+) -> Result<(), Failure> {
+    if !position.is_finite() {
+        return Err((
+            line_key.into(),
+            format!("{position_key} = {position} must be finite"),
+        ));
+    }
+    if position.abs().max_element() > MAX_LIGHT_COORDINATE {
+        return Err((
+            line_key.into(),
+            format!("{position_key} = {position} is outside ±{MAX_LIGHT_COORDINATE:e}"),
+        ));
+    }
+    if !(reach.is_finite() && reach > 0.0 && reach <= MAX_LIGHT_COORDINATE) {
+        return Err((
+            line_key.into(),
+            format!("{reach_key} = {reach} must be positive and at most {MAX_LIGHT_COORDINATE:e}"),
+        ));
+    }
+    Ok(())
+}
+
 fn nonzero(key: &str, v: Vec3) -> Result<(), Failure> {
     finite_vec(key, v)?;
     if v.length_squared() == 0.0 {
@@ -307,6 +343,12 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
         0.0,
         4096.0,
     )?;
+    range_f32(
+        "shading.specular1_exponent",
+        s.specular1_exponent,
+        0.0,
+        4096.0,
+    )?;
     if !matches!(s.specular_tangents, 1 | 3) {
         return Err((
             "shading.specular_tangents".into(),
@@ -363,6 +405,39 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
             }
             super::SpotKind::Light => {
                 nonzero(&key("direction"), spot.direction)?;
+                match (spot.position, spot.reach) {
+                    (Some(position), Some(reach)) => {
+                        let (position_key, reach_key) = (key("position"), key("reach"));
+                        let line_key = match position.is_finite()
+                            && position.abs().max_element() <= MAX_LIGHT_COORDINATE
+                        {
+                            true => &reach_key,
+                            false => &position_key,
+                        };
+                        point_light(line_key, &position_key, position, &reach_key, reach)?
+                    }
+                    (Some(_), None) => {
+                        return Err((
+                            key("position"),
+                            format!(
+                                "{} is set, so {} must be too: the distance at which the spot fades out",
+                                key("position"),
+                                key("reach")
+                            ),
+                        ));
+                    }
+                    (None, Some(_)) => {
+                        return Err((
+                            key("reach"),
+                            format!(
+                                "{} needs {}: a reach bounds a spot light at a point",
+                                key("reach"),
+                                key("position")
+                            ),
+                        ));
+                    }
+                    (None, None) => {}
+                }
                 range_f32(&key("exponent"), spot.exponent, 0.0, 10_000.0)?;
                 range_f32(&key("inner_threshold"), spot.inner_threshold, 0.0, 1.0)?;
                 range_f32(&key("outer_threshold"), spot.outer_threshold, 0.0, 1.0)?;
@@ -506,7 +581,17 @@ pub(super) fn validate(scene: &Scene, limits: &Limits) -> Result<(), Failure> {
             ));
         }
         for (k, m) in b.matches.iter().enumerate() {
-            nonzero(&format!("burn.matches[{k}]"), *m)?;
+            let key = format!("burn.matches[{k}]");
+            match m {
+                super::MatchSetting::Direction(direction) => nonzero(&key, *direction)?,
+                super::MatchSetting::Point(point) => point_light(
+                    &key,
+                    &format!("{key}.position"),
+                    point.position,
+                    &format!("{key}.reach"),
+                    point.reach,
+                )?,
+            }
         }
         range_f32("burn.start", b.start, -1.0e6, 1.0e6)?;
         range_f32("burn.high_exponent", b.high_exponent, 0.0, 100_000.0)?;
@@ -757,6 +842,10 @@ mod tests {
         let err = parse("[shading]\nweights = { shadow = -1.0 }\n").unwrap_err();
         assert_eq!(err.line, Some(2), "{err}");
         assert!(err.message.contains("shading.weights.shadow"), "{err}");
+        let err =
+            parse("[shading]\nlighting = \"eq-3.5\"\nspecular1_exponent = -2.0\n").unwrap_err();
+        assert_eq!(err.line, Some(3), "{err}");
+        assert!(err.message.contains("shading.specular1_exponent"), "{err}");
     }
 
     #[test]
@@ -838,6 +927,7 @@ mod tests {
                 "outside",
             ),
             ("[shading]", "shadow_texel", ["opaque", "alpha"], "count"),
+            ("[shading]", "lighting", ["eq-3.6", "eq-3.5"], "eq-3.4"),
             ("[[stripes]]", "kind", ["axis", "light"], "band"),
         ] {
             for value in good {

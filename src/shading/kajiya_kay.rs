@@ -61,7 +61,10 @@ pub struct LightingExponents {
     pub banks: f32,
     /// The specular exponent (eq. 2.7).
     pub specular: f32,
-    /// The exponent of the specular that is then dampened (3.2.3).
+    /// The exponent of the single-tangent lobe the uncoloured last term is made of: the
+    /// specular that is then dampened (3.2.3, eq. 3.6/3.7); under eq. 3.5 the specular
+    /// exponent itself, so the lobe is `ψ_specularity1`
+    /// ([`LightingModel::lobe_exponent`](super::LightingModel::lobe_exponent)).
     pub dampened: f32,
 }
 
@@ -72,8 +75,10 @@ pub struct StrandLighting {
     pub diffuse: f32,
     /// [`specular_with_tangents`] with the specular exponent.
     pub specular: f32,
-    /// [`kajiya_kay_specular`] with the dampened exponent, before
-    /// [`dampened_specular`](super::dampened_specular).
+    /// [`kajiya_kay_specular`] of the strand's own tangent with the third exponent
+    /// ([`LightingExponents::dampened`]): the lobe of the uncoloured last term, before
+    /// [`uncoloured_specular`](super::uncoloured_specular) (dampened under eq. 3.6/3.7, raised
+    /// to `n` under eq. 3.5).
     pub specular_to_dampen: f32,
 }
 
@@ -516,6 +521,33 @@ mod tests {
             let three =
                 specular_with_tangents(t, n, l, e, p, SpecularTangents::Three(lobes), shift);
             assert_close(three, expected, tol, "three-tangent specular");
+        }
+    }
+
+    #[test]
+    fn eq_3_5_uncoloured_term_matches_f64() {
+        // (ψ_specularity1)^n from vectors: eq. 2.7 of the strand's own tangent with the
+        // specular exponent p, then the power n, against the f64 base raised to p then n.
+        // Bound: the lobe's (pow_tol) carried through the outer power to first order, plus
+        // the outer power's own rounding (4·(1 + |n·log2 s|) ulp, numeric.rs).
+        let mut rng = Lcg::new(17);
+        for _ in 0..2000 {
+            let (t, l, e) = (rng.cube(), rng.cube(), rng.cube());
+            // n ≥ 1: below 1 the outer power's slope has no bound at 0, where the base's
+            // absolute error is largest (lighting.rs tests n < 1 on exact bases).
+            let (p, n) = (rng.range(1.0, 64.0), rng.range(1.0, 8.0));
+            let (x, dx) = spec_base64(t, l, e);
+            let lobe = x.max(0.0).powf(f64::from(p));
+            let d_lobe = pow_tol(x, dx, f64::from(p));
+            let expected = lobe.powf(f64::from(n));
+            let own = if expected > 0.0 {
+                4.0 * (1.0 + (f64::from(n) * lobe.log2()).abs()) * expected * 1.2e-7 + 1e-38
+            } else {
+                0.0
+            };
+            let tol = pow_tol(lobe, d_lobe, f64::from(n)) + own;
+            let got = crate::shading::specularity1_power(kajiya_kay_specular(t, l, e, p), n);
+            assert_close(got, expected, tol, "(ψ_specularity1)^n");
         }
     }
 

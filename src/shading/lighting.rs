@@ -1,8 +1,9 @@
-//! The lighting combination of thesis 3.2.3 (shading stage): dampened specular and the final
-//! colour, eq. 3.7, with one user weight per term.
+//! The lighting combination of thesis 3.2.3 (shading stage): the uncoloured last term (the
+//! dampened specular of eq. 3.6/3.7, or `(ψ_specularity1)^n` of eq. 3.5) and the final colour,
+//! eq. 3.7, with one user weight per term.
 
 use super::lanes::Vec3xN;
-use super::numeric::{saturate_select, saturate_x4};
+use super::numeric::{pow01, pow01_lanes, saturate_select, saturate_x4};
 use glam::Vec3;
 use wide::f32x4;
 
@@ -44,6 +45,82 @@ pub fn dampened_specular_lanes<const N: usize>(s: [f32; N]) -> [f32; N] {
     out
 }
 
+/// The last, uncoloured term of thesis eq. 3.5, `(ψ_specularity1)^n`:
+///
+/// `ψ_final = ψ_ambient + strandColor·(ψ_diffuse + ψ_specularitynew) + (ψ_specularity1)^n`.
+///
+/// `specularity1` is `ψ_specularity1`, the Kajiya–Kay specular of the strand's own tangent
+/// alone (eq. 2.7 with the specular exponent: the centre lobe of the three-tangent
+/// `ψ_specularitynew`, before any strand colour); the result is it raised to the power `n`, in
+/// `[0, 1]`. The base is saturated first and `n` follows the lobe exponent convention (NaN acts
+/// as 1, negative as 0), as every lobe's power: pelage's own `pow01`, `2^(n·log2 s)`, so at
+/// `n = 1` the result is `specularity1` within a few ulps, not bit for bit.
+#[inline]
+pub fn specularity1_power(specularity1: f32, n: f32) -> f32 {
+    pow01(specularity1, n)
+}
+
+/// [`specularity1_power`] of `N` lanes with one exponent, each lane the same bits.
+#[inline(always)]
+pub fn specularity1_power_lanes<const N: usize>(specularity1: [f32; N], n: f32) -> [f32; N] {
+    pow01_lanes(specularity1, [n; N])
+}
+
+/// Which equation of thesis 3.2.3 lights the fur: what the uncoloured last term is
+/// ([`uncoloured_specular`]) and the exponent of the lobe it is made of ([`Self::lobe_exponent`]).
+/// Everything else is shared: `ψ_ambient + strandColor·(ψ_diffuse + ψ_specular)` with one or
+/// three tangents (`ψ_specularitynew` of eq. 3.5 is the three-tangent specular), and the shadow
+/// subtracted as eq. 3.7 adds it to eq. 3.6. Scene key `shading.lighting`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum LightingModel {
+    /// Eq. 3.6 (with the shadow, eq. 3.7): the last term is the dampened specular
+    /// ([`dampened_specular`]) of the lobe with the dampened exponent; the default (what the
+    /// thesis's system renders).
+    #[default]
+    Eq36,
+    /// Eq. 3.5: the last term is `(ψ_specularity1)^n` ([`specularity1_power`]) of the lobe
+    /// with the specular exponent, its own tangent alone: a highlight in the light's colour
+    /// over the strand-coloured one (thesis figure 3.13).
+    Eq35 {
+        /// The power `n` of `(ψ_specularity1)^n`.
+        n: f32,
+    },
+}
+
+impl LightingModel {
+    /// The exponent of the single-tangent lobe the uncoloured last term is made of: under
+    /// eq. 3.6/3.7 the dampened specular's own low exponent, under eq. 3.5 the specular
+    /// exponent (the lobe is then `ψ_specularity1`, eq. 2.7 of the strand's own tangent).
+    #[inline]
+    pub fn lobe_exponent(self, specular_exponent: f32, dampened_exponent: f32) -> f32 {
+        match self {
+            LightingModel::Eq36 => dampened_exponent,
+            LightingModel::Eq35 { .. } => specular_exponent,
+        }
+    }
+}
+
+/// The uncoloured last term of the lighting, from the lobe of the strand's own tangent with
+/// [`LightingModel::lobe_exponent`]: [`dampened_specular`] of it (`ψ_dampenedspecularity`,
+/// eq. 3.6/3.7) or [`specularity1_power`] (`(ψ_specularity1)^n`, eq. 3.5). It enters
+/// [`final_colour`] as its `dampened` argument, with the same weight and light colour.
+#[inline]
+pub fn uncoloured_specular(lobe: f32, model: LightingModel) -> f32 {
+    match model {
+        LightingModel::Eq36 => dampened_specular(lobe),
+        LightingModel::Eq35 { n } => specularity1_power(lobe, n),
+    }
+}
+
+/// [`uncoloured_specular`] of `N` lanes, each lane the same bits.
+#[inline(always)]
+pub fn uncoloured_specular_lanes<const N: usize>(lobe: [f32; N], model: LightingModel) -> [f32; N] {
+    match model {
+        LightingModel::Eq36 => dampened_specular_lanes(lobe),
+        LightingModel::Eq35 { n } => specularity1_power_lanes(lobe, n),
+    }
+}
+
 /// The user weights of eq. 3.7 (thesis 3.2.3: "we multiply each of these by a user defined
 /// value").
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,7 +131,8 @@ pub struct ShadingWeights {
     pub diffuse: f32,
     /// Weight of `ψ_specularity` (inside the strand-colour product).
     pub specular: f32,
-    /// Weight of `ψ_dampenedspecularity`.
+    /// Weight of the uncoloured last term: `ψ_dampenedspecularity` (eq. 3.6/3.7), or
+    /// `(ψ_specularity1)^n` under eq. 3.5 ([`uncoloured_specular`]).
     pub dampened: f32,
     /// Weight of `ψ_shadow`, subtracted.
     pub shadow: f32,
@@ -130,6 +208,10 @@ pub fn ambient_term(ambient: f32, strand_colour: Vec3, term: AmbientTerm) -> Vec
 /// `A + strand·light·(w_d·diffuse + w_s·specular) + light·w_p·dampened − w_sh·shadow`,
 /// with `A = ambient_term(w_a·ambient, strand, term)` ([`ambient_term`]: `w_a·ambient` alone,
 /// or times the strand colour), then each channel clamped to `[0, 1]`.
+///
+/// Eq. 3.5 is the same sum: `specular` is then `ψ_specularitynew` and `dampened` the
+/// uncoloured `(ψ_specularity1)^n` ([`uncoloured_specular`] gives either last term), with the
+/// shadow of eq. 3.7 subtracted too.
 ///
 /// Choices where the thesis is open: the light colour multiplies the lit terms and the
 /// dampened specular (a white highlight under a white light), not the ambient or the shadow.
@@ -265,6 +347,69 @@ mod tests {
     }
 
     #[test]
+    fn specularity1_power_matches_f64() {
+        // Bound: pow01's, 3·(1 + |n·log2 s|) ulp of the result (documented and measured in
+        // numeric.rs), taken as 4·(1 + |t|)·2^−23 relative, plus 1e-38 for subnormal results.
+        let mut rng = Lcg::new(25);
+        for k in 0..5000 {
+            let s = match k % 50 {
+                0 => 0.0,
+                1 => 1.0,
+                2 => 1e-30,
+                _ => rng.unit(),
+            };
+            let n = [1.0, 2.0, 0.5][k % 3] * rng.range(0.25, 16.0);
+            let exact = f64::from(s).powf(f64::from(n));
+            let t = f64::from(n) * f64::from(s).log2();
+            let tol = if s > 0.0 {
+                4.0 * (1.0 + t.abs()) * exact * f64::from(f32::EPSILON) + 1e-38
+            } else {
+                0.0
+            };
+            assert_close(specularity1_power(s, n), exact, tol, "(ψ_specularity1)^n");
+        }
+        // n = 1: the actual specularity, within an ulp or two.
+        for s in [0.1f32, 0.37, 0.9, 1.0] {
+            assert_close(specularity1_power(s, 1.0), f64::from(s), 3e-7, "n = 1");
+        }
+        // The range and the exponent convention of every lobe.
+        assert_eq!(specularity1_power(0.0, 4.0), 0.0);
+        assert_eq!(specularity1_power(1.0, 4.0), 1.0);
+        assert_eq!(specularity1_power(2.0, 4.0), 1.0);
+        assert_eq!(specularity1_power(-0.5, 4.0), 0.0);
+        assert_eq!(specularity1_power(f32::NAN, 4.0), 0.0);
+        assert_eq!(specularity1_power(0.3, 0.0), 1.0);
+        assert_eq!(specularity1_power(0.3, -2.0), 1.0);
+        assert_close(
+            specularity1_power(0.3, f32::NAN),
+            0.3,
+            3e-7,
+            "NaN n acts as 1",
+        );
+        // A larger n narrows the highlight: the power falls below the lobe everywhere in (0, 1).
+        assert!(specularity1_power(0.5, 4.0) < specularity1_power(0.5, 1.0));
+    }
+
+    #[test]
+    fn uncoloured_specular_is_the_model_s_last_term() {
+        let mut rng = Lcg::new(26);
+        for _ in 0..2000 {
+            let lobe = rng.range(-0.2, 1.2);
+            let n = rng.range(0.5, 8.0);
+            let eq36 = uncoloured_specular(lobe, LightingModel::Eq36);
+            let eq35 = uncoloured_specular(lobe, LightingModel::Eq35 { n });
+            assert_eq!(eq36.to_bits(), dampened_specular(lobe).to_bits());
+            assert_eq!(eq35.to_bits(), specularity1_power(lobe, n).to_bits());
+        }
+        assert_eq!(LightingModel::default(), LightingModel::Eq36);
+        assert_eq!(LightingModel::Eq36.lobe_exponent(24.0, 4.0), 4.0);
+        assert_eq!(
+            LightingModel::Eq35 { n: 2.0 }.lobe_exponent(24.0, 4.0),
+            24.0
+        );
+    }
+
+    #[test]
     fn default_weights() {
         let w = ShadingWeights::default();
         assert_eq!(
@@ -377,6 +522,18 @@ mod tests {
             let got = dampened_specular_lanes(lanes);
             for i in 0..N {
                 assert_eq!(got[i].to_bits(), dampened_specular(lanes[i]).to_bits());
+            }
+            let n = [1.0, 3.5, 0.0, f32::NAN, 40.0][k % 5];
+            for model in [LightingModel::Eq36, LightingModel::Eq35 { n }] {
+                let got = uncoloured_specular_lanes(lanes, model);
+                for i in 0..N {
+                    assert_eq!(
+                        got[i].to_bits(),
+                        uncoloured_specular(lanes[i], model).to_bits(),
+                        "{model:?} of {}",
+                        lanes[i]
+                    );
+                }
             }
             let strand: [Vec3; N] = std::array::from_fn(|i| {
                 Vec3::new(

@@ -9,10 +9,11 @@
 //! | eq. 2.5 (+ Banks 4.8) | [`kajiya_kay_diffuse`], [`BANKS_EXPONENT`] | `kajiya_kay.rs` |
 //! | eq. 2.7, eq. 3.5 | [`kajiya_kay_specular`], [`shift_tangent`], [`specular_with_tangents`], [`three_lobe_specular`] ([`specular_lobe_sum`], [`specular_lobe_mean`]) | `kajiya_kay.rs` |
 //! | 3.2.3 dampening | [`dampened_specular`] | `lighting.rs` |
-//! | eq. 3.7 | [`final_colour`], [`ShadingWeights`], [`ambient_term`] ([`ambient_constant`], [`ambient_of_strand`]) | `lighting.rs` |
+//! | eq. 3.5's last term | [`specularity1_power`] (`(ψ_specularity1)^n`), [`uncoloured_specular`] and [`LightingModel`] (eq. 3.6 or 3.5) | `lighting.rs` |
+//! | eq. 3.7 (and 3.5) | [`final_colour`], [`ShadingWeights`], [`ambient_term`] ([`ambient_constant`], [`ambient_of_strand`]) | `lighting.rs` |
 //! | 3.2.2 projection | [`project_to_uv`], [`project_to_uv_dropping`] | `projection.rs` |
 //! | 3.2.2 shadow | [`shadow_change`], [`shadow_lookup_count`], [`shell_shadow`], [`shadow_texel`] ([`shadow_of_opaque`], [`shadow_of_alpha`]) | `shadow.rs` |
-//! | 3.2.4 spots, stripes | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`], [`light_stripe_intensity`] | `spots.rs` |
+//! | 3.2.4 spots, stripes; 3.4 matches at points | [`ellipsoid_spot_intensity`], [`light_spot_intensity`], [`point_light_intensity`] ([`point_light_cosine`], [`reach_falloff`]), [`spot_gradient`], [`apply_spot`], [`apply_spots`], [`stripe_intensity`], [`light_stripe_intensity`] | `spots.rs` |
 //! | 3.3 wind | [`wind_force`], [`wind_displacement`], [`wind_uv_offset`], [`bend_tangent`] | `wind.rs` |
 //! | 3.4 burning | [`burn_rule`], [`BurnOutcome`], [`burn_exponent`] | `burn.rs` |
 //! | beyond: maps | [`layer_within_length`], [`density_alpha`], [`density_band`], [`comb_lean`], [`tint_strand`] | `maps.rs` |
@@ -63,6 +64,9 @@
 //!   alpha ≥ [`SHADOW_OPAQUE_ALPHA`] ([`ShadowTexel`], default the alpha); stripes as bands of
 //!   the lobe of a light fixed to the object ([`light_stripe_intensity`], the default, the
 //!   thesis's) or across an axis ([`stripe_intensity`]).
+//! - The lighting equation is a scene key too ([`LightingModel`]): eq. 3.6/3.7, the thesis's
+//!   final system, by default, or eq. 3.5, whose last term `(ψ_specularity1)^n` replaces the
+//!   dampened specular (`n` default 1, the caption of figure 3.13's "actual specularity").
 //!
 //! # How the tests check the numbers
 //! Each term is compared with an f64 reimplementation written separately in its test (sines
@@ -104,9 +108,10 @@ pub use kajiya_kay::{
 };
 pub use lanes::{LANES, Vec3x4, Vec3x8, Vec3xN};
 pub use lighting::{
-    AmbientTerm, DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, ShadingWeights,
-    ambient_constant, ambient_of_strand, ambient_term, dampened_specular, dampened_specular_lanes,
-    final_colour, final_colour_lanes,
+    AmbientTerm, DAMPENED_SPECULAR_MAX, DAMPENING_THRESHOLD, DEFAULT_SHADOW_WEIGHT, LightingModel,
+    ShadingWeights, ambient_constant, ambient_of_strand, ambient_term, dampened_specular,
+    dampened_specular_lanes, final_colour, final_colour_lanes, specularity1_power,
+    specularity1_power_lanes, uncoloured_specular, uncoloured_specular_lanes,
 };
 pub use lod::{
     lod_alpha, lod_fin_fade, lod_fur_pixels, lod_layer_order, lod_layer_spans, lod_shell_level,
@@ -128,7 +133,8 @@ pub use spots::{
     apply_spot, apply_spot_lanes, apply_spots, ellipsoid_spot_intensity,
     ellipsoid_spot_intensity_lanes, light_spot_cosine, light_spot_cosine_below,
     light_spot_intensity, light_spot_lobe, light_spot_lobe_lanes, light_stripe_band,
-    light_stripe_intensity, spot_gradient, spot_gradient_lanes, stripe_intensity,
+    light_stripe_intensity, point_light_cosine, point_light_intensity, reach_falloff,
+    spot_gradient, spot_gradient_lanes, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

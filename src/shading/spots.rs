@@ -116,6 +116,61 @@ pub fn light_spot_lobe(cosine: f32, exponent: f32) -> f32 {
     pow01(cosine, exponent)
 }
 
+/// The reach of a spot or match placed at a point (beyond the thesis, which fixes spot lights
+/// to the object by direction alone): `(1 − d²/R²)²` for a point at squared distance
+/// `distance_squared = d²` from it, inside the reach `R`; 0 at `d ≥ R`.
+///
+/// Why this form: it is 1 at the point, falls smoothly (its slope is 0 at the point and at the
+/// reach, so no ring shows where it ends) and is exactly 0 beyond `R`, so a light lobe that
+/// also lights a far surface facing the point (a torus's inner wall across the hole) stops at
+/// the reach. It needs `d²` only, no square root. A reach that is not positive, or a NaN
+/// distance, gives 0.
+#[inline(always)]
+pub fn reach_falloff(distance_squared: f32, reach: f32) -> f32 {
+    let q = distance_squared / (reach * reach);
+    if q < 1.0 && reach > 0.0 {
+        let k = 1.0 - q;
+        k * k
+    } else {
+        0.0
+    }
+}
+
+/// The cosine between a unit surface normal and the direction towards a point light, given
+/// the offset from the surface point to the light (`light − point`): `(n̂·o)/√(o·o)`, the
+/// cosine of [`light_spot_intensity`] for a light at a point rather than in a direction.
+/// A zero or NaN offset gives 0.
+#[inline(always)]
+pub fn point_light_cosine(unit_normal: Vec3, offset: Vec3) -> f32 {
+    let length_squared = offset.dot(offset);
+    if length_squared > 0.0 {
+        unit_normal.dot(offset) / length_squared.sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// A light spot or match at a point (thesis 3.4, matches "stable at certain points"; 3.2.4's
+/// light spot placed rather than aimed): the lobe `max(0, cos)^exponent` of the direction
+/// from the surface point towards the light ([`point_light_cosine`]), times the
+/// [`reach_falloff`] of the distance. So one light lights one region: the surface facing it
+/// near it, fading out by `reach`.
+///
+/// `unit_normal` is normalised already; `point` is the surface point and `light` the light's
+/// position, in the same (object) frame.
+#[inline]
+pub fn point_light_intensity(
+    unit_normal: Vec3,
+    point: Vec3,
+    light: Vec3,
+    reach: f32,
+    exponent: f32,
+) -> f32 {
+    let offset = light - point;
+    let falloff = reach_falloff(offset.dot(offset), reach);
+    light_spot_lobe(point_light_cosine(unit_normal, offset), exponent) * falloff
+}
+
 /// A cosine below which the lobe is surely below `level`: for every f32 `c < bound`,
 /// `light_spot_lobe(c, exponent) < level`. It lets a shader skip the power where the lobe cannot
 /// matter (outside a spot's ring, under the burn threshold) without changing a single bit.
@@ -504,6 +559,80 @@ mod tests {
             0.0
         );
         assert_eq!(light_stripe_band(0.5, f32::NAN, 0.1, 0.05), 0.0);
+    }
+
+    #[test]
+    fn reach_falloff_matches_f64_and_ends_at_the_reach() {
+        let mut rng = Lcg::new(77);
+        for _ in 0..2000 {
+            let reach = rng.range(0.01, 50.0);
+            let d = rng.range(0.0, 1.5) * reach;
+            let expected = {
+                let q = (f64::from(d) / f64::from(reach)).powi(2);
+                if q < 1.0 { (1.0 - q).powi(2) } else { 0.0 }
+            };
+            assert_close(reach_falloff(d * d, reach), expected, 1e-5, "reach falloff");
+        }
+        assert_eq!(reach_falloff(0.0, 2.0), 1.0);
+        assert_eq!(reach_falloff(4.0, 2.0), 0.0);
+        assert_eq!(reach_falloff(100.0, 2.0), 0.0);
+        assert_eq!(reach_falloff(1.0, 0.0), 0.0);
+        assert_eq!(reach_falloff(0.0, 0.0), 0.0);
+        assert_eq!(reach_falloff(1.0, -3.0), 0.0);
+        assert_eq!(reach_falloff(f32::NAN, 2.0), 0.0);
+        assert_eq!(reach_falloff(1.0, f32::NAN), 0.0);
+        // Monotone in the distance, smooth at the reach: the last step before it is tiny.
+        let mut last = 1.0;
+        for k in 0..=1000 {
+            let d = k as f32 / 1000.0 * 2.0;
+            let f = reach_falloff(d * d, 2.0);
+            assert!(f <= last, "{d}");
+            last = f;
+        }
+        let near = reach_falloff(1.999f32.powi(2), 2.0);
+        assert!(near < 1e-5, "{near}");
+    }
+
+    #[test]
+    fn point_lights_match_f64() {
+        let mut rng = Lcg::new(91);
+        for _ in 0..2000 {
+            let n = rng.cube().normalize_or_zero();
+            let (point, light) = (rng.cube() * 4.0, rng.cube() * 4.0);
+            let (reach, p) = (rng.range(0.5, 8.0), rng.range(1.0, 64.0));
+            let offset = light.as_dvec3() - point.as_dvec3();
+            let c = n.as_dvec3().dot(offset) / offset.length();
+            let q = offset.length_squared() / f64::from(reach).powi(2);
+            let falloff = if q < 1.0 { (1.0 - q).powi(2) } else { 0.0 };
+            let expected = c.max(0.0).powf(f64::from(p)) * falloff;
+            let tol = 1e-5 + f64::from(p) * 2e-6;
+            assert_close(
+                point_light_intensity(n, point, light, reach, p),
+                expected,
+                tol,
+                "point light",
+            );
+            assert_close(
+                point_light_cosine(n, light - point),
+                c,
+                1e-6,
+                "point light cosine",
+            );
+        }
+        // Straight above the surface point: the full lobe; beside it on the surface: none.
+        let up = Vec3::Y;
+        assert_eq!(point_light_intensity(up, Vec3::ZERO, up, 2.0, 8.0), 0.5625);
+        assert_eq!(
+            point_light_intensity(up, Vec3::ZERO, Vec3::X, 2.0, 8.0),
+            0.0
+        );
+        // Facing it, but beyond the reach (the far wall across a torus's hole): none.
+        assert_eq!(
+            point_light_intensity(-Vec3::X, Vec3::X * 5.0, Vec3::ZERO, 3.0, 1.0),
+            0.0
+        );
+        assert_eq!(point_light_cosine(up, Vec3::ZERO), 0.0);
+        assert_eq!(point_light_cosine(up, Vec3::splat(f32::NAN)), 0.0);
     }
 
     #[test]

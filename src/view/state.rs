@@ -6,8 +6,8 @@ use super::input::Action;
 use super::orbit;
 use glam::Vec3;
 use pelage::scene::{
-    BurnSettings, DebugView, GravitySettings, LodSettings, MapSettings, Scene, SpotKind,
-    SpotSettings, StripeSettings, WindSettings,
+    BurnSettings, DebugView, GravitySettings, LodSettings, MapSettings, MatchSetting, Scene,
+    SpotKind, SpotSettings, StripeSettings, WindSettings,
 };
 
 /// The viewer's clock: the scene's own `time` plus the seconds that have run since.
@@ -182,7 +182,9 @@ impl ViewState {
                 burn.start = self.clock.now();
                 if self.initial.burn.is_none() {
                     // No matches in the scene: one on the side facing the camera.
-                    burn.matches = vec![(s.camera.eye - s.camera.target).normalize_or(Vec3::Y)];
+                    burn.matches = vec![MatchSetting::Direction(
+                        (s.camera.eye - s.camera.target).normalize_or(Vec3::Y),
+                    )];
                 }
                 if !self.clock.running() {
                     note = Some("burning starts when time runs (space)".to_string());
@@ -333,7 +335,9 @@ mod tests {
         let burn = s.scene.burn.clone().expect("burning");
         assert_eq!(burn.start, 1.25);
         let towards_eye = (s.scene.camera.eye - s.scene.camera.target).normalize();
-        assert!((burn.matches[0] - towards_eye).length() < 1e-6);
+        assert!(
+            matches!(burn.matches[0], MatchSetting::Direction(d) if (d - towards_eye).length() < 1e-6)
+        );
         s.apply(Action::ResetBurn, 480.0);
         assert!(s.scene.burn.is_none());
     }

@@ -47,6 +47,7 @@ __all__ = [
     "shadow_texel",
     "shell_shadow",
     "sin_between",
+    "specularity1_power",
     "spot_gradient",
     "stripe_intensity",
 ]
@@ -144,6 +145,15 @@ def dampened_specular(specular: ArrayLike) -> Floats:
     return _shaped(_pelage.dampened_specular(n, s), shape)
 
 
+def specularity1_power(specularity1: ArrayLike, exponent: ArrayLike = 1.0) -> Floats:
+    """Thesis eq. 3.5's last term, ``(ψ_specularity1)^n``: the Kajiya–Kay specular of the
+    strand's own tangent (:func:`kajiya_kay_specular` with the specular exponent) raised to
+    ``n`` (``exponent``, the scene's ``specular1_exponent``, default 1). It stands where eq. 3.7
+    has the dampened specular: pass it as :func:`final_colour`'s ``dampened``."""
+    n, shape, (s, p) = _broadcast(("specularity1", specularity1, 0), ("exponent", exponent, 0))
+    return _shaped(_pelage.specularity1_power(n, s, p), shape)
+
+
 def final_colour(
     strand_colour: ArrayLike,
     light_colour: ArrayLike,
@@ -157,7 +167,8 @@ def final_colour(
 ) -> Floats:
     """Thesis eq. 3.7: ``ambient + strandColour·light·(diffuse + specular) +
     light·dampened − shadow``, each term scaled by its weight (``weights``: ambient, diffuse,
-    specular, dampened, shadow), each channel clamped to [0, 1]. ``ambient_term``:
+    specular, dampened, shadow), each channel clamped to [0, 1]; eq. 3.5 with
+    :func:`specularity1_power` as ``dampened``. ``ambient_term``:
     ``"strand"`` (ambient times the strand colour, the default) or ``"constant"``. Returns
     RGB, a last axis of 3."""
     if isinstance(weights, (str, bytes)) or len(weights) != 5:
