@@ -2,7 +2,7 @@
 //! compare and export for GPU implementations, view them in a window.
 //!
 //! Exit status: 0 on success, 2 on bad input (scene, mesh, arguments, a scene over a resource
-//! limit, an unknown `PELAGE_SIMD` level), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
+//! limit, an unknown `PELAGE_SIMD` level or `PELAGE_BATCH_LANES` width), 1 on other failures (an output that cannot be written), 101 on a panic (a bug).
 
 mod cli;
 #[cfg(feature = "viewer")]
@@ -120,9 +120,13 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return argument_error(e),
     };
-    // An unknown `PELAGE_SIMD` is bad input, refused before any work (the library alone would
+    // An unknown `PELAGE_SIMD` or `PELAGE_BATCH_LANES` is bad input, refused before any work (the library alone would
     // ignore it and run the best level).
     if let Err(e) = pelage::simd::SimdLevel::from_env() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
+    if let Err(e) = pelage::simd::wide_batches_from_env() {
         eprintln!("error: {e}");
         return ExitCode::from(2);
     }

@@ -189,7 +189,8 @@ pub trait Kernel {
 }
 
 /// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
-/// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline.
+/// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline;
+/// below `Avx512`, [`BATCH_LANES_ENV`] can make it the baseline with 16-lane batches.
 #[inline(always)]
 pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
     #[cfg(target_arch = "x86_64")]
@@ -198,13 +199,56 @@ pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
             // SAFETY: the features `x86::avx512` enables were detected on this CPU just above.
             return unsafe { x86::avx512(kernel) };
         }
+        if wide_batches_everywhere() {
+            return kernel.run::<WIDE_LANES>();
+        }
         if level >= SimdLevel::Avx2 && x86::has_avx2() {
             // SAFETY: the features `x86::avx2` enables were detected on this CPU just above.
             return unsafe { x86::avx2(kernel) };
         }
     }
     let _ = level;
+    if wide_batches_everywhere() {
+        return kernel.run::<WIDE_LANES>();
+    }
     kernel.run::<LANES>()
+}
+
+/// The environment variable that runs the fur stage's batches [`WIDE_LANES`] wide below
+/// [`SimdLevel::Avx512`] too: `16`, the one value it takes (unset or empty: the level decides).
+/// Those levels then run the baseline copy with 16-lane batches, the portable code of the
+/// AVX-512 copy (without its texture intrinsics), so that a CPU without AVX-512 checks that a
+/// lane's result never depends on the batch's width: `.ci/run` reruns the golden images so.
+/// For checking only; it is slower than the level's own copy.
+pub const BATCH_LANES_ENV: &str = "PELAGE_BATCH_LANES";
+
+/// An unknown value of [`BATCH_LANES_ENV`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{BATCH_LANES_ENV}={value:?} is not a batch width: expected 16 (or unset)")]
+pub struct BatchLanesError {
+    /// The value given.
+    pub value: String,
+}
+
+/// Whether [`BATCH_LANES_ENV`] asks for 16-lane batches at every level: `Ok(false)` when unset
+/// or empty, an error for any other value than `16`.
+pub fn wide_batches_from_env() -> Result<bool, BatchLanesError> {
+    match std::env::var(BATCH_LANES_ENV) {
+        Ok(value) if value.trim().is_empty() => Ok(false),
+        Ok(value) if value.trim() == "16" => Ok(true),
+        Ok(value) => Err(BatchLanesError { value }),
+        Err(std::env::VarError::NotPresent) => Ok(false),
+        Err(std::env::VarError::NotUnicode(value)) => Err(BatchLanesError {
+            value: value.to_string_lossy().into_owned(),
+        }),
+    }
+}
+
+/// [`wide_batches_from_env`], read once per process; an unknown value is ignored here (the
+/// `pelage` command line refuses it first, with exit status 2).
+fn wide_batches_everywhere() -> bool {
+    static WIDE: OnceLock<bool> = OnceLock::new();
+    *WIDE.get_or_init(|| wide_batches_from_env().unwrap_or(false))
 }
 
 /// The x86-64 copies and their feature tests (`is_x86_feature_detected!` caches its answer).
@@ -310,7 +354,7 @@ mod tests {
     #[test]
     fn batches_hold_16_lanes_at_avx512_only() {
         for level in SimdLevel::ALL {
-            let wide = level.capped() == SimdLevel::Avx512;
+            let wide = level.capped() == SimdLevel::Avx512 || wide_batches_everywhere();
             let lanes = if wide { WIDE_LANES } else { LANES };
             assert_eq!(dispatch(level, Width), lanes, "{level}");
         }

@@ -111,6 +111,53 @@ fn the_binary_gives_the_same_file_at_every_level() {
     assert!(std::fs::read(&plain).expect("png") == files[0]);
 }
 
+/// A render of the default scene at 120×90 with the given environment, as PNG bytes.
+fn render_with(env: &[(&str, &str)], name: &str) -> Vec<u8> {
+    let out = scratch("batch-lanes").join(format!("{name}.png"));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .envs(env.iter().copied())
+        .args(["render", "--width", "120", "--height", "90", "-o"])
+        .arg(&out)
+        .output()
+        .expect("pelage runs");
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    std::fs::read(&out).expect("png")
+}
+
+#[test]
+fn sixteen_lane_batches_give_the_same_file_at_every_level() {
+    // `PELAGE_BATCH_LANES=16` runs the 16-lane batches of the avx512 level on any CPU (the
+    // baseline copy below avx512): a lane's result never depends on the batch's width.
+    let reference = render_with(&[("PELAGE_SIMD", "sse2")], "eight");
+    for level in ["sse2", "avx2", "avx512"] {
+        let wide = render_with(
+            &[("PELAGE_SIMD", level), ("PELAGE_BATCH_LANES", "16")],
+            &format!("sixteen-{level}"),
+        );
+        assert!(wide == reference, "16-lane batches at {level} differ");
+    }
+}
+
+#[test]
+fn an_unknown_batch_width_is_refused_with_exit_status_2() {
+    let out = scratch("batch-lanes-unknown").join("x.png");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_pelage"))
+        .env("PELAGE_BATCH_LANES", "32")
+        .args(["render", "-o"])
+        .arg(&out)
+        .output()
+        .expect("pelage runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("PELAGE_BATCH_LANES=\"32\""), "{err}");
+    assert!(err.contains("expected 16"), "{err}");
+    assert!(!out.exists());
+}
+
 #[test]
 fn an_unknown_level_is_refused_with_exit_status_2() {
     let out = scratch("unknown").join("x.png");
