@@ -1113,7 +1113,9 @@ struct FinVertex {
     @location(12) lean: vec3<f32>,
 }
 
-// The fin vertex closure: the quads and their varyings come from the CPU (silhouette edges).
+// The fin vertex closure: the quads and their varyings come from the CPU (silhouette edges),
+// the wind among them: none at the roots, the whole at the top edge, so `shade_fur` bends a fin's
+// tangent as the shell at the same height bends its own.
 @vertex
 fn vs_fin(v: FinVertex) -> FurVaryings {
     var out: FurVaryings;

@@ -491,6 +491,18 @@ fn fin_axes(a: &mesh::Vertex, b: &mesh::Vertex) -> (Vec3, Vec3) {
     (x, (up - x * up.dot(x)).normalize_or_zero())
 }
 
+/// A fin corner's wind varying: the world vector `bend` (direction × force; none: zero) in the
+/// fin's frame, times the `fraction` of it the corner takes. The fins' layer bends the tangent by
+/// the whole varying ([`fin_layer_params`]'s height fraction is 1), so a fin whose roots take 0
+/// and whose top edge takes 1 bends each fragment's strand tangent as the shell at its height
+/// bends its own (thesis 3.3.1: the bend grows with the height), up to the top shell's at the
+/// top edge.
+fn bend_varying(bend: Option<Vec3>, frame: &mesh::frame::TangentFrame, fraction: f32) -> Vec3 {
+    bend.map_or(Vec3::ZERO, |b| {
+        crate::shading::to_tangent_space(b, frame) * fraction
+    })
+}
+
 /// The fins' layer: they stand for the fur's full height, so they burn as the top shell does;
 /// their self-shadow is that of the shell [`FIN_SHADOW_REACH`] below the tips.
 fn fin_layer_params(s: &Scene) -> LayerParams {
@@ -1249,6 +1261,7 @@ impl PreparedScene {
     ) -> (Vec<(Vec3, FurVaryings)>, Vec<[u32; 3]>) {
         let top = self.scene.fur.number_of_shells - 1;
         let maps = &self.maps;
+        let wind = bending.wind.map(|(direction, force)| direction * force);
         let place = |p: Vec3| match moved {
             Some(offset) => p + offset,
             None => p,
@@ -1363,11 +1376,13 @@ impl PreparedScene {
                 };
                 let (a_top, a_length) = top_of(a);
                 let (b_top, b_length) = top_of(b);
+                // The corners, with their share of the top shell's bend (0 at the roots, 1 at
+                // the top edge, as the geometry bends).
                 let corners = [
-                    (a.position, a, Vec2::new(u0, 0.0), 1.0, from_fade),
-                    (b.position, b, Vec2::new(u1, 0.0), 1.0, to_fade),
-                    (b_top, b, Vec2::new(u1, 1.0), b_length, to_fade),
-                    (a_top, a, Vec2::new(u0, 1.0), a_length, from_fade),
+                    (a.position, a, Vec2::new(u0, 0.0), 1.0, from_fade, 0.0),
+                    (b.position, b, Vec2::new(u1, 0.0), 1.0, to_fade, 0.0),
+                    (b_top, b, Vec2::new(u1, 1.0), b_length, to_fade, 1.0),
+                    (a_top, a, Vec2::new(u0, 1.0), a_length, from_fade, 1.0),
                 ];
                 // The fins' self-shadow (3.2.2 on the side view): the lookups run from each point
                 // towards the light over the fin's full height, in the fin's own texture, so the
@@ -1379,7 +1394,7 @@ impl PreparedScene {
                     z * height,
                 );
                 let base = vertices.len() as u32;
-                for (p, root, uv, length, facing) in corners {
+                for (p, root, uv, length, facing, bent) in corners {
                     let p = place(p);
                     let fade = match self.scene.fur.fin_selection {
                         FinSelectionSetting::Outline => facing,
@@ -1406,7 +1421,8 @@ impl PreparedScene {
                             lit: LitVaryings {
                                 light: crate::shading::to_tangent_space(light, &frame),
                                 eye: crate::shading::to_tangent_space(eye - p, &frame),
-                                wind: Vec3::ZERO,
+                                wind: bend_varying(wind, &frame, bent),
+                                // The lean's bend is left out: see `docs/src/thesis.md`.
                                 lean: Vec3::ZERO,
                             },
                         },
