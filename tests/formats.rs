@@ -47,10 +47,12 @@ fn exr_and_16_bit_png_hold_the_values_before_8_bit_rounding() {
     for ((&f, &b), &w) in exr.as_raw().iter().zip(png.as_raw()).zip(png16.as_raw()) {
         // The float rounds to the 8-bit byte by the framebuffer's rule...
         assert_eq!(quantise_unorm8(f), b, "{f}");
-        // ...and the 16-bit value to the float within half a 16-bit step (and f32's rounding
-        // of `65535·c + 0.5`, a thousandth of a step).
+        // ...and the 16-bit value to the float within half a 16-bit step and f32's rounding
+        // of `65535·c` (half an ulp below 65536: 2⁻⁹ of a step; e.g. c = 0.51338214 gives
+        // 33644.498 in f64 but 33644.5 in f32, so 33645).
         assert!(
-            (f64::from(w) / 65535.0 - f64::from(f).clamp(0.0, 1.0)).abs() <= 0.501 / 65535.0,
+            (f64::from(w) / 65535.0 - f64::from(f).clamp(0.0, 1.0)).abs()
+                <= (0.5 + 1.0 / 512.0) / 65535.0,
             "{w} {f}"
         );
         if (f * 255.0).fract() != 0.0 {
