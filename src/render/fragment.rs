@@ -567,37 +567,39 @@ impl ShadeParams {
         let mut spots: Vec<Spot> = s
             .spots
             .iter()
-            .map(|spot| match (spot.kind, spot.position.zip(spot.reach)) {
-                (SpotKind::Ellipsoid, _) => Spot::Ellipsoid {
-                    centre: spot.centre,
-                    radii: spot.radii,
-                    inner: spot.inner,
-                    colour: spot.colour,
-                },
-                (SpotKind::Light, Some((position, reach))) => Spot::PointLight {
-                    position,
-                    reach,
-                    exponent: spot.exponent,
-                    inner_threshold: spot.inner_threshold,
-                    outer_threshold: spot.outer_threshold,
-                    outside_below: shading::light_spot_cosine_below(
-                        spot.inner_threshold.min(spot.outer_threshold),
-                        spot.exponent,
-                    ),
-                    colour: spot.colour,
-                },
-                (SpotKind::Light, None) => Spot::Light {
-                    direction: spot.direction.normalize_or_zero(),
-                    cosine_direction: spot.direction.normalize_or_zero().normalize_or_zero(),
-                    exponent: spot.exponent,
-                    inner_threshold: spot.inner_threshold,
-                    outer_threshold: spot.outer_threshold,
-                    outside_below: shading::light_spot_cosine_below(
-                        spot.inner_threshold.min(spot.outer_threshold),
-                        spot.exponent,
-                    ),
-                    colour: spot.colour,
-                },
+            .map(|spot| {
+                // A light spot's cosine below which its weight is surely 0 (by direction or
+                // towards its point alike).
+                let outside_below = shading::light_spot_cosine_below(
+                    spot.inner_threshold.min(spot.outer_threshold),
+                    spot.exponent,
+                );
+                match (spot.kind, spot.position.zip(spot.reach)) {
+                    (SpotKind::Ellipsoid, _) => Spot::Ellipsoid {
+                        centre: spot.centre,
+                        radii: spot.radii,
+                        inner: spot.inner,
+                        colour: spot.colour,
+                    },
+                    (SpotKind::Light, Some((position, reach))) => Spot::PointLight {
+                        position,
+                        reach,
+                        exponent: spot.exponent,
+                        inner_threshold: spot.inner_threshold,
+                        outer_threshold: spot.outer_threshold,
+                        outside_below,
+                        colour: spot.colour,
+                    },
+                    (SpotKind::Light, None) => Spot::Light {
+                        direction: spot.direction.normalize_or_zero(),
+                        cosine_direction: spot.direction.normalize_or_zero().normalize_or_zero(),
+                        exponent: spot.exponent,
+                        inner_threshold: spot.inner_threshold,
+                        outer_threshold: spot.outer_threshold,
+                        outside_below,
+                        colour: spot.colour,
+                    },
+                }
             })
             .collect();
         spots.extend(s.stripes.iter().map(|stripe| match stripe.kind {
