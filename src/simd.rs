@@ -191,9 +191,13 @@ pub trait Kernel {
 /// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
 /// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline;
 /// below `Avx512`, [`BATCH_LANES_ENV`] can make it the baseline with 16-lane batches.
+///
+/// Fuzz builds (`cfg(fuzzing)`, set by cargo-fuzz) hold the baseline copy alone: the fuzz targets
+/// look for panics and hangs on bad input, which every copy shares, and each copy is minutes of
+/// instrumented compilation.
 #[inline(always)]
 pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", not(fuzzing)))]
     {
         if level >= SimdLevel::Avx512 && x86::has_avx512() {
             // SAFETY: the features `x86::avx512` enables were detected on this CPU just above.
@@ -208,6 +212,7 @@ pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
         }
     }
     let _ = level;
+    #[cfg(not(fuzzing))]
     if wide_batches_everywhere() {
         return kernel.run::<WIDE_LANES>();
     }
@@ -246,6 +251,7 @@ pub fn wide_batches_from_env() -> Result<bool, BatchLanesError> {
 
 /// [`wide_batches_from_env`], read once per process; an unknown value is ignored here (the
 /// `pelage` command line refuses it first, with exit status 2).
+#[cfg_attr(fuzzing, allow(dead_code))]
 fn wide_batches_everywhere() -> bool {
     static WIDE: OnceLock<bool> = OnceLock::new();
     *WIDE.get_or_init(|| wide_batches_from_env().unwrap_or(false))
@@ -254,6 +260,7 @@ fn wide_batches_everywhere() -> bool {
 /// The x86-64 copies and their feature tests (`is_x86_feature_detected!` caches its answer).
 #[cfg(target_arch = "x86_64")]
 mod x86 {
+    #[cfg_attr(fuzzing, allow(unused_imports))]
     use super::{Kernel, LANES, WIDE_LANES};
 
     /// x86-64-v3.
@@ -278,11 +285,13 @@ mod x86 {
             && is_x86_feature_detected!("avx512vl")
     }
 
+    #[cfg(not(fuzzing))]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
     pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
         kernel.run::<LANES>()
     }
 
+    #[cfg(not(fuzzing))]
     #[target_feature(
         enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe,avx512f,avx512bw,avx512cd,avx512dq,avx512vl"
     )]
