@@ -390,30 +390,77 @@ pub struct BurnState {
     pub exponent: f32,
     /// Cosines below this give intensities under the burn threshold for certain.
     pub unburnt_below: f32,
+    /// `burnt_from[k]`: a largest cosine (over the matches by direction) from which the fur is
+    /// surely burnt away on shell `k` ([`BurnState::burnt_from_cosine`]); +∞ where nothing is
+    /// sure (the root shell, which never burns).
+    pub burnt_from: Vec<f32>,
 }
 
 impl BurnState {
+    /// The burn of matches by direction (`directions`, normalised here) and at `points`, with
+    /// lobe exponent `exponent`, on fur of `max_shell + 1` shells.
+    pub fn new(
+        directions: &[Vec3],
+        points: Vec<PointMatch>,
+        exponent: f32,
+        max_shell: u32,
+    ) -> Self {
+        let directions: Vec<Vec3> = directions.iter().map(|d| d.normalize_or_zero()).collect();
+        BurnState {
+            cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
+            directions,
+            points,
+            exponent,
+            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
+            burnt_from: (0..=max_shell)
+                .map(|layer| {
+                    shading::light_spot_cosine_above(
+                        shading::burnt_away_above(layer, max_shell),
+                        exponent,
+                    )
+                })
+                .collect(),
+        }
+    }
+
+    /// The cosine from which fur is surely burnt away on shell `layer` of `max_shell`: a
+    /// fragment whose largest cosine towards the matches by direction is at least this is
+    /// [`BurnOutcome::Burnt`] by [`shading::burn_rule`], whatever its power rounds to and
+    /// whatever the matches at points add (they only raise the intensity). +∞ when nothing
+    /// is sure, and for a `max_shell` other than the one this state was made for.
+    #[inline(always)]
+    pub fn burnt_from_cosine(&self, layer: u32, max_shell: u32) -> f32 {
+        if self.burnt_from.len() != max_shell as usize + 1 {
+            return f32::INFINITY;
+        }
+        self.burnt_from
+            .get(layer as usize)
+            .copied()
+            .unwrap_or(f32::INFINITY)
+    }
+
     /// Whether every fragment of a triangle with these vertex normals is surely burnt away on
     /// shell `layer` of `max_shell` (so the triangle can be skipped without changing a pixel).
     /// Only matches given by direction are bounded; matches at points never skip a triangle.
     ///
     /// Why it is safe: a fragment's normal is the renormalised convex combination of the vertex
     /// normals, whose length is at most 1, so its dot with a match `m` is at least the smallest
-    /// vertex dot `c` when `c > 0`; its intensity is then at least `c^e`. The triangle is skipped
-    /// only when `(c − 1e-5)^e` exceeds both 0.1 and `1 − layer/max_shell` by 1e-3, margins far
-    /// above the rounding of the fragment's own computation. The root layer never burns.
+    /// vertex dot `c` when `c > 0`. The triangle is skipped only when `c − 1e-5` (a margin far
+    /// above the rounding of the fragment's own dot products) reaches the layer's
+    /// [`BurnState::burnt_from_cosine`], from which every fragment is burnt away. The root
+    /// layer never burns.
     pub fn surely_burnt(&self, normals: [Vec3; 3], layer: u32, max_shell: u32) -> bool {
-        if layer == 0 || max_shell == 0 {
+        let burnt_from = self.burnt_from_cosine(layer, max_shell);
+        if burnt_from > 1.0 {
             return false;
         }
-        let needed = 0.1f32.max(1.0 - layer as f32 / max_shell as f32) + 1.0e-3;
         self.directions.iter().any(|&m| {
             let c = normals
                 .iter()
                 .map(|n| n.normalize_or_zero().dot(m))
                 .fold(f32::INFINITY, f32::min)
                 - 1.0e-5;
-            c > 0.0 && shading::light_spot_lobe(c, self.exponent) >= needed
+            c > 0.0 && c >= burnt_from
         })
     }
 
@@ -464,13 +511,52 @@ impl BurnState {
     /// by direction for all lanes at once ([`shading::light_spot_lobe_lanes`], skipped where
     /// every lane is surely under the threshold), the matches at points lane by lane.
     #[inline]
-    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     pub fn intensity_lanes<const N: usize>(
         &self,
         unit_normals: &Vec3xN<N>,
         points: &Vec3xN<N>,
     ) -> [f32; N] {
+        self.intensity_lanes_unless_burnt(unit_normals, points, f32::INFINITY)
+            .0
+    }
+
+    /// [`shading::burn_rule`] of [`BurnState::intensity_lanes`] on shell `layer` of `max_shell`,
+    /// lane by lane the same outcome; a lane whose largest cosine towards the matches by
+    /// direction reaches [`BurnState::burnt_from_cosine`] is burnt away without its power, and
+    /// the power is skipped where no lane needs it.
+    #[inline(always)]
+    pub fn outcome_lanes<const N: usize>(
+        &self,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+        layer: u32,
+        max_shell: u32,
+    ) -> [BurnOutcome; N] {
+        let burnt_from = self.burnt_from_cosine(layer, max_shell);
+        let (intensity, burnt) =
+            self.intensity_lanes_unless_burnt(unit_normals, points, burnt_from);
+        std::array::from_fn(|i| {
+            if burnt[i] {
+                BurnOutcome::Burnt
+            } else {
+                shading::burn_rule(intensity[i], layer, max_shell)
+            }
+        })
+    }
+
+    /// The intensities of [`BurnState::intensity_lanes`], and which lanes are surely burnt away
+    /// because their largest cosine towards the matches by direction is at least `burnt_from`:
+    /// their intensity is left unfinished (their power and the matches at points skipped).
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    fn intensity_lanes_unless_burnt<const N: usize>(
+        &self,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+        burnt_from: f32,
+    ) -> ([f32; N], [bool; N]) {
         let mut strongest = [0.0f32; N];
+        let mut burnt = [false; N];
         if !self.cosine_directions.is_empty() {
             let mut cosine = [f32::NEG_INFINITY; N];
             for &m in &self.cosine_directions {
@@ -479,7 +565,12 @@ impl BurnState {
                     cosine[i] = cosine[i].max(dot[i]);
                 }
             }
-            if cosine.iter().any(|&c| c >= self.unburnt_below) {
+            let mut needs_power = false;
+            for i in 0..N {
+                burnt[i] = cosine[i] >= burnt_from;
+                needs_power |= cosine[i] >= self.unburnt_below && !burnt[i];
+            }
+            if needs_power {
                 let lobe = shading::light_spot_lobe_lanes(cosine, self.exponent);
                 for i in 0..N {
                     strongest[i] = if cosine[i] >= self.unburnt_below {
@@ -492,6 +583,9 @@ impl BurnState {
         }
         if !self.points.is_empty() {
             for i in 0..N {
+                if burnt[i] {
+                    continue;
+                }
                 let (unit_normal, point) = (unit_normals.lane(i), points.lane(i));
                 for m in &self.points {
                     let offset = m.position - point;
@@ -506,7 +600,7 @@ impl BurnState {
                 }
             }
         }
-        strongest
+        (strongest, burnt)
     }
 }
 
@@ -542,6 +636,9 @@ pub struct ShadeParams {
     pub wind_tangent_fraction: f32,
     /// Whether a lean (gravity, motion, combing) bends the tangents.
     pub lean: bool,
+    /// The SIMD level the frame's out-of-line helpers run at (the frame's own; a speed choice,
+    /// never an image one): [`crate::simd::SimdLevel::active`] unless the renderer sets it.
+    pub simd: crate::simd::SimdLevel,
 }
 
 /// What differs between the layers of one frame.
@@ -632,27 +729,24 @@ impl ShadeParams {
                     .matches
                     .iter()
                     .filter_map(|m| match m {
-                        MatchSetting::Direction(d) => Some(d.normalize_or_zero()),
+                        MatchSetting::Direction(d) => Some(*d),
                         MatchSetting::Point(_) => None,
                     })
                     .collect();
-                BurnState {
-                    cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
-                    directions,
-                    points: b
-                        .matches
-                        .iter()
-                        .filter_map(|m| match m {
-                            MatchSetting::Point(p) => Some(*p),
-                            MatchSetting::Direction(_) => None,
-                        })
-                        .collect(),
+                let points = b
+                    .matches
+                    .iter()
+                    .filter_map(|m| match m {
+                        MatchSetting::Point(p) => Some(*p),
+                        MatchSetting::Direction(_) => None,
+                    })
+                    .collect();
+                BurnState::new(
+                    &directions,
+                    points,
                     exponent,
-                    unburnt_below: shading::light_spot_cosine_below(
-                        shading::BURN_THRESHOLD,
-                        exponent,
-                    ),
-                }
+                    s.fur.number_of_shells.saturating_sub(1),
+                )
             })
         });
         let lighting = match s.shading.lighting {
@@ -700,6 +794,7 @@ impl ShadeParams {
             burn,
             wind_tangent_fraction: s.wind.as_ref().map_or(0.0, |w| w.tangent_fraction),
             lean: s.leans(),
+            simd: crate::simd::SimdLevel::active(),
         }
     }
 
@@ -948,12 +1043,60 @@ fn quad_entry(
             char_factor: [1.0; 4],
         };
     }
-    quad_entry_lanes(quad, slots, length_map, maps, layer, p)
+    quad_entry_at_level(quad, slots, length_map, maps, layer, p)
 }
 
-/// [`quad_entry`]'s work where something burns or a length map cuts shells: kept out of the
-/// hot path's inlined code, which every frame without them runs.
+/// [`quad_entry_lanes`] out of line, so that frames without a burn or length map do not carry
+/// its code in the hot path (inlined, it made them 12–14 % slower), yet compiled for the
+/// frame's SIMD level ([`ShadeParams::simd`], through [`crate::simd::dispatch`]): in the
+/// baseline its normalisations and four-lane power ran as scalar code, a quarter of a burning
+/// frame's time. Every level gives the same bits.
 #[inline(never)]
+fn quad_entry_at_level(
+    quad: &Quad<'_, FurVaryings>,
+    slots: &mut QuadSlots,
+    length_map: Option<&Texture>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> QuadEntry {
+    struct Entry<'q, 'a, 'b> {
+        quad: &'q Quad<'b, FurVaryings>,
+        slots: &'q mut QuadSlots,
+        length_map: Option<&'a Texture>,
+        maps: &'a SurfaceMaps,
+        layer: &'a LayerParams,
+        p: &'a ShadeParams,
+    }
+    impl crate::simd::Kernel for Entry<'_, '_, '_> {
+        type Output = QuadEntry;
+        #[inline(always)]
+        fn run<const BATCH: usize>(self) -> QuadEntry {
+            quad_entry_lanes(
+                self.quad,
+                self.slots,
+                self.length_map,
+                self.maps,
+                self.layer,
+                self.p,
+            )
+        }
+    }
+    crate::simd::dispatch(
+        p.simd,
+        Entry {
+            quad,
+            slots,
+            length_map,
+            maps,
+            layer,
+            p,
+        },
+    )
+}
+
+/// [`quad_entry`]'s work where something burns or a length map cuts shells.
+#[inline(always)]
 fn quad_entry_lanes(
     quad: &Quad<'_, FurVaryings>,
     slots: &mut QuadSlots,
@@ -966,31 +1109,22 @@ fn quad_entry_lanes(
         charred: 0,
         char_factor: [1.0; 4],
     };
-    // The burn's intensity of the four lanes at once (helper lanes too; their result is
-    // dropped).
-    let intensity = p.burn.as_ref().map(|b| {
-        let mut unit_normals = Vec3xN::<4>::default();
-        let mut objects = Vec3xN::<4>::default();
-        for lane in 0..4 {
-            let n = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
-            let o = quad.field(lane, |v| &v.surface.object);
-            (
-                unit_normals.x[lane],
-                unit_normals.y[lane],
-                unit_normals.z[lane],
-            ) = n.into();
-            (objects.x[lane], objects.y[lane], objects.z[lane]) = o.into();
-        }
-        b.intensity_lanes(&unit_normals, &objects)
-    });
+    // The burn's outcome of the four lanes at once (helper lanes too; their result is
+    // dropped). No closure here: LLVM kept `Option::map`'s closure out of line, compiled for
+    // the baseline (27 % of a burning frame).
+    #[allow(clippy::manual_map)]
+    let outcome = match &p.burn {
+        Some(burn) => Some(quad_burn_outcome(quad, burn, layer)),
+        None => None,
+    };
     for lane in 0..4 {
         if slots.lanes() & (1 << lane) == 0 {
             continue;
         }
         let mut shown = true;
-        if let Some(intensity) = intensity {
-            // `ShadeParams::burn_outcome_at_unit_normal`, its intensity found above.
-            match shading::burn_rule(intensity[lane], layer.index, layer.max_shell) {
+        if let Some(outcome) = outcome {
+            // `ShadeParams::burn_outcome_at_unit_normal`, found above.
+            match outcome[lane] {
                 BurnOutcome::Burnt => shown = false,
                 BurnOutcome::Charred { colour_factor } => {
                     entry.charred |= 1 << lane;
@@ -1013,6 +1147,29 @@ fn quad_entry_lanes(
         }
     }
     entry
+}
+
+/// [`BurnState::outcome_lanes`] of a quad's four lanes on `layer`, from their interpolated
+/// normals (normalised here) and object positions.
+#[inline(always)]
+fn quad_burn_outcome(
+    quad: &Quad<'_, FurVaryings>,
+    burn: &BurnState,
+    layer: &LayerParams,
+) -> [BurnOutcome; 4] {
+    let mut unit_normals = Vec3xN::<4>::default();
+    let mut objects = Vec3xN::<4>::default();
+    for lane in 0..4 {
+        let n = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
+        let o = quad.field(lane, |v| &v.surface.object);
+        (
+            unit_normals.x[lane],
+            unit_normals.y[lane],
+            unit_normals.z[lane],
+        ) = n.into();
+        (objects.x[lane], objects.y[lane], objects.z[lane]) = o.into();
+    }
+    burn.outcome_lanes(&unit_normals, &objects, layer.index, layer.max_shell)
 }
 
 /// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
@@ -1865,13 +2022,7 @@ mod tests {
                 })
                 .collect();
             let exponent = rng.range(0.5, 400.0);
-            let burn = BurnState {
-                cosine_directions: directions.iter().map(|m| m.normalize_or_zero()).collect(),
-                directions,
-                points,
-                exponent,
-                unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, exponent),
-            };
+            let burn = BurnState::new(&directions, points, exponent, 29);
             let mut normals = Vec3xN::<4>::default();
             let mut objects = Vec3xN::<4>::default();
             for i in 0..4 {
@@ -1889,16 +2040,66 @@ mod tests {
     }
 
     #[test]
+    fn burn_outcome_lanes_are_the_rule_of_the_scalar_intensity_on_every_shell() {
+        let mut rng = Lcg::new(59);
+        let max_shell = 29;
+        for round in 0..120 {
+            let directions: Vec<Vec3> = (0..1 + round % 6)
+                .map(|_| rng.cube().normalize_or_zero())
+                .collect();
+            let points: Vec<PointMatch> = (0..round % 3)
+                .map(|_| PointMatch {
+                    position: rng.cube() * 3.0,
+                    reach: rng.range(0.5, 6.0),
+                })
+                .collect();
+            let exponent = rng.range(0.5, 400.0);
+            let burn = BurnState::new(&directions, points, exponent, max_shell);
+            for layer in 0..=max_shell {
+                // Normals whose cosine towards the first match lies a few ulps around the
+                // layer's burnt bound, and random ones.
+                let m = burn.cosine_directions[0];
+                let side = m.any_orthonormal_vector();
+                let bound = burn.burnt_from_cosine(layer, max_shell);
+                let mut normals = Vec3xN::<4>::default();
+                let mut objects = Vec3xN::<4>::default();
+                for i in 0..4 {
+                    let n = if bound <= 1.0 && i < 3 {
+                        let mut c = bound;
+                        for _ in 0..rng.range(0.0, 6.0) as usize {
+                            c = if i == 0 { c.next_down() } else { c.next_up() };
+                        }
+                        let c = c.min(1.0);
+                        (m * c + side * (1.0 - c * c).max(0.0).sqrt()).normalize_or_zero()
+                    } else {
+                        rng.cube().normalize_or_zero()
+                    };
+                    let o = rng.cube() * 3.0;
+                    (normals.x[i], normals.y[i], normals.z[i]) = n.into();
+                    (objects.x[i], objects.y[i], objects.z[i]) = o.into();
+                }
+                let lanes = burn.outcome_lanes(&normals, &objects, layer, max_shell);
+                for (i, lane) in lanes.iter().enumerate() {
+                    let intensity = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
+                    let scalar = shading::burn_rule(intensity, layer, max_shell);
+                    assert_eq!(*lane, scalar, "round {round} layer {layer} lane {i}");
+                }
+            }
+        }
+        // Another number of shells than the state was made for: nothing is taken as sure.
+        let burn = BurnState::new(&[Vec3::X], vec![], 3.0, max_shell);
+        assert!(burn.burnt_from_cosine(20, max_shell) < 1.0);
+        assert_eq!(burn.burnt_from_cosine(20, 30), f32::INFINITY);
+        assert_eq!(burn.burnt_from_cosine(0, max_shell), f32::INFINITY);
+    }
+
+    #[test]
     fn a_match_at_a_point_burns_one_region_of_a_torus_where_a_direction_burns_two() {
         // A torus of radii 6 and 2.4 in the xz plane: the outer equator at +x and the inner wall
         // at −x both face +x.
         let (outer, inner) = (Vec3::new(8.4, 0.0, 0.0), Vec3::new(-3.6, 0.0, 0.0));
-        let burn = |directions: Vec<Vec3>, points: Vec<PointMatch>| BurnState {
-            cosine_directions: directions.clone(),
-            directions,
-            points,
-            exponent: 6.0,
-            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 6.0),
+        let burn = |directions: Vec<Vec3>, points: Vec<PointMatch>| {
+            BurnState::new(&directions, points, 6.0, 29)
         };
         let by_direction = burn(vec![Vec3::X], vec![]);
         assert_eq!(by_direction.intensity(Vec3::X, outer), 1.0);
@@ -1921,11 +2122,7 @@ mod tests {
         let normal = Vec3::new(1.0, 0.0, 0.3).normalize();
         let beside = outer + Vec3::new(-0.1, 0.0, 1.0);
         assert!(at_point.intensity(normal, beside) < under);
-        let wider = BurnState {
-            exponent: 2.0,
-            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 2.0),
-            ..at_point.clone()
-        };
+        let wider = BurnState::new(&[], at_point.points.clone(), 2.0, 29);
         assert!(wider.intensity(normal, beside) > at_point.intensity(normal, beside));
     }
 
@@ -1949,13 +2146,7 @@ mod tests {
                 reach: rng.range(0.5, 3.0),
             })
             .collect();
-        let burn = BurnState {
-            cosine_directions: matches.iter().map(|m| m.normalize_or_zero()).collect(),
-            directions: matches.clone(),
-            points: points.clone(),
-            exponent: 7.5,
-            unburnt_below: shading::light_spot_cosine_below(shading::BURN_THRESHOLD, 7.5),
-        };
+        let burn = BurnState::new(&matches, points.clone(), 7.5, 29);
         for normal in normals(&mut rng) {
             let point = rng.cube() * 2.0;
             // The plain statement: light_spot_cosine normalises both vectors itself.

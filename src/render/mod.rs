@@ -959,7 +959,8 @@ impl PreparedScene {
         let view_proj = camera.view_projection(width as f32 / height as f32);
         let light = s.light.direction.normalize_or_zero();
         let repeat = Vec2::from(s.fur.texture_repeat);
-        let shade = ShadeParams::from_scene(s, time);
+        let mut shade = ShadeParams::from_scene(s, time);
+        shade.simd = level;
         let shade = &shade;
         let bending = Bending::at(s, time);
         let wind = bending.wind;

@@ -72,6 +72,23 @@ pub fn burn_rule(intensity: f32, shell_index: u32, max_shell: u32) -> BurnOutcom
     }
 }
 
+/// An intensity from which [`burn_rule`] surely burns shell `shell_index` of `max_shell` away:
+/// every `I ≥ level` (NaN aside) is [`BurnOutcome::Burnt`]. A shader that knows a lane's
+/// intensity is at least this skips its exact value (`light_spot_cosine_above` turns it into
+/// a cosine).
+///
+/// `level = max(0.1, 1 − shell_index/max_shell) + 10⁻³`: above the strict threshold, and with
+/// `I ≥ level` the rule's `(1 − min(I, 1))·max_shell` is at most `shell_index − 10⁻³·max_shell`
+/// before rounding, which f32's rounding (below `2⁻²³·max_shell`) cannot bring up to
+/// `shell_index`. +∞ for the root shell (never burnt) and for `max_shell = 0`.
+#[inline]
+pub fn burnt_away_above(shell_index: u32, max_shell: u32) -> f32 {
+    if shell_index == 0 || max_shell == 0 {
+        return f32::INFINITY;
+    }
+    BURN_THRESHOLD.max(1.0 - shell_index as f32 / max_shell as f32) + 1.0e-3
+}
+
 /// The schedule of a match's spot exponent over time (thesis 3.4: "in the beginning of the
 /// simulation it is inactive, then we change it to a higher value to only affect the region
 /// closest to the fire, later we decrease the exponent to increase the area").
@@ -122,6 +139,42 @@ mod tests {
         BurnOutcome::Charred {
             colour_factor: factor,
         }
+    }
+
+    #[test]
+    fn intensities_from_the_burnt_level_burn_the_shell_away() {
+        let mut rng = Lcg::new(71);
+        for max_shell in [1u32, 2, 3, 7, 29, 30, 99, 255, 1023, 4095] {
+            assert_eq!(burnt_away_above(0, max_shell), f32::INFINITY);
+            for shell in 1..=max_shell {
+                let level = burnt_away_above(shell, max_shell);
+                assert!(level > BURN_THRESHOLD, "{shell}/{max_shell}");
+                let mut intensity = level;
+                for _ in 0..32 {
+                    assert_eq!(
+                        burn_rule(intensity, shell, max_shell),
+                        BurnOutcome::Burnt,
+                        "{intensity} on {shell}/{max_shell}"
+                    );
+                    intensity = intensity.next_up();
+                }
+                for _ in 0..8 {
+                    let above = rng.range(level.min(1.0), 1.5);
+                    if above >= level {
+                        assert_eq!(burn_rule(above, shell, max_shell), BurnOutcome::Burnt);
+                    }
+                }
+                // The margin is small: well under the level, the shell is not burnt.
+                let under = (1.0 - shell as f64 / max_shell as f64).max(0.1) - 2.0e-3;
+                if under > 0.1 {
+                    assert_ne!(
+                        burn_rule(under as f32, shell, max_shell),
+                        BurnOutcome::Burnt
+                    );
+                }
+            }
+        }
+        assert_eq!(burnt_away_above(3, 0), f32::INFINITY);
     }
 
     #[test]

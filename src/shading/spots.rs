@@ -193,6 +193,33 @@ pub fn light_spot_cosine_below(level: f32, exponent: f32) -> f32 {
     }
 }
 
+/// A cosine from which the lobe is surely above `level`: for every f32 `c ≥ bound`,
+/// `light_spot_lobe(c, exponent) > level`. The twin of [`light_spot_cosine_below`], for a
+/// shader that skips the power where any value above `level` has the same effect (fur surely
+/// burnt away).
+///
+/// Derivation: `bound = (level·(1 + 10⁻³))^(1/exponent)` in f64, rounded up to f32, so the exact
+/// lobe of any larger cosine is at least 10⁻³ (relative) over `level`, far more than the error
+/// of the lobe's power (`numeric::pow01_lanes`). Where no cosine up to 1 is surely enough
+/// (`level·(1 + 10⁻³) ≥ 1`), or with nothing safe to promise (NaN, an exponent that is not
+/// positive, a `level` that is not positive), the bound is +∞: every lane takes its power.
+pub fn light_spot_cosine_above(level: f32, exponent: f32) -> f32 {
+    if !(level > 0.0 && exponent > 0.0) {
+        return f32::INFINITY;
+    }
+    let target = f64::from(level) * (1.0 + 1.0e-3);
+    if target >= 1.0 {
+        return f32::INFINITY;
+    }
+    let exact = target.powf(1.0 / f64::from(exponent));
+    let bound = exact as f32;
+    if f64::from(bound) < exact {
+        bound.next_up()
+    } else {
+        bound
+    }
+}
+
 /// Inner circle / ring / outside of a light-based spot (thesis 3.2.4: "in the inner circle the
 /// full color of the predefined spot is given, and in the outer region we add a gradient"):
 /// 1 for `intensity ≥ inner_threshold`, 0 for `intensity ≤ outer_threshold`,
@@ -669,6 +696,48 @@ mod tests {
         assert_eq!(light_spot_cosine_below(f32::NAN, 4.0), f32::NEG_INFINITY);
         assert_eq!(light_spot_cosine_below(0.5, f32::NAN), f32::NEG_INFINITY);
         assert_eq!(light_spot_cosine_below(0.5, f32::INFINITY), 1.0);
+    }
+
+    #[test]
+    fn lobes_from_the_upper_cosine_bound_are_above_the_level() {
+        let mut rng = Lcg::new(37);
+        for _ in 0..300 {
+            let level = rng.range(1.0e-3, 0.99);
+            let exponent = if rng.unit() < 0.5 {
+                rng.range(0.05, 2.0)
+            } else {
+                rng.range(2.0, 400.0)
+            };
+            let bound = light_spot_cosine_above(level, exponent);
+            assert!(bound.is_finite() && bound <= 1.0, "{level} {exponent}");
+            // Tight: the exact lobe at the bound is within 1 % over the level, and just under
+            // the bound the exact lobe is at most the level with its margin.
+            let at_bound = f64::from(bound).powf(f64::from(exponent));
+            assert!(at_bound > f64::from(level) && at_bound <= 1.01 * f64::from(level));
+            let mut c = bound;
+            for _ in 0..64 {
+                if c > 1.0 {
+                    break;
+                }
+                assert!(
+                    light_spot_lobe(c, exponent) > level,
+                    "{c}^{exponent} vs {level}"
+                );
+                c = c.next_up();
+            }
+            for c in [1.0, 1.0f32.next_up(), bound + (1.0 - bound) * 0.5] {
+                if c >= bound {
+                    assert!(light_spot_lobe(c, exponent) > level);
+                }
+            }
+        }
+        // No cosine up to 1 is surely enough, or nothing safe to promise: +∞.
+        assert_eq!(light_spot_cosine_above(0.9995, 4.0), f32::INFINITY);
+        assert_eq!(light_spot_cosine_above(1.0, 4.0), f32::INFINITY);
+        assert_eq!(light_spot_cosine_above(0.0, 4.0), f32::INFINITY);
+        assert_eq!(light_spot_cosine_above(0.5, 0.0), f32::INFINITY);
+        assert_eq!(light_spot_cosine_above(f32::NAN, 4.0), f32::INFINITY);
+        assert_eq!(light_spot_cosine_above(0.5, f32::NAN), f32::INFINITY);
         let n = Vec3::new(0.3, -0.2, 0.9);
         let d = Vec3::new(1.0, 2.0, 3.0);
         assert_eq!(
