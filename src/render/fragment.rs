@@ -506,22 +506,8 @@ impl BurnState {
         strongest
     }
 
-    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits: the
-    /// cosines and their largest as plain loops over the lanes, the one power of the matches
-    /// by direction for all lanes at once ([`shading::light_spot_lobe_lanes`], skipped where
-    /// every lane is surely under the threshold), the matches at points lane by lane.
-    #[inline]
-    pub fn intensity_lanes<const N: usize>(
-        &self,
-        unit_normals: &Vec3xN<N>,
-        points: &Vec3xN<N>,
-    ) -> [f32; N] {
-        self.intensity_lanes_unless_burnt(unit_normals, points, f32::INFINITY)
-            .0
-    }
-
-    /// [`shading::burn_rule`] of [`BurnState::intensity_lanes`] on shell `layer` of `max_shell`,
-    /// lane by lane the same outcome; a lane whose largest cosine towards the matches by
+    /// [`shading::burn_rule`] of [`BurnState::intensity_at_unit_normal`] on shell `layer` of
+    /// `max_shell` for `N` lanes, lane by lane the same outcome; a lane whose largest cosine towards the matches by
     /// direction reaches [`BurnState::burnt_from_cosine`] is burnt away without its power, and
     /// the power is skipped where no lane needs it.
     #[inline(always)]
@@ -544,9 +530,12 @@ impl BurnState {
         })
     }
 
-    /// The intensities of [`BurnState::intensity_lanes`], and which lanes are surely burnt away
-    /// because their largest cosine towards the matches by direction is at least `burnt_from`:
-    /// their intensity is left unfinished (their power and the matches at points skipped).
+    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits (the
+    /// cosines and their largest as plain loops over the lanes, the one power of the matches by
+    /// direction for all lanes at once, skipped where no lane needs it, the matches at points
+    /// lane by lane), and which lanes are surely burnt away because their largest cosine towards
+    /// the matches by direction is at least `burnt_from`: their intensity is left unfinished
+    /// (their power and the matches at points skipped). `burnt_from = +∞` finishes every lane.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     fn intensity_lanes_unless_burnt<const N: usize>(
@@ -2008,21 +1997,27 @@ mod tests {
         v
     }
 
+    /// A burn of `directions` random matches by direction and `points` at points, with a random
+    /// exponent, on 30 shells.
+    fn random_burn(rng: &mut Lcg, directions: usize, points: usize) -> BurnState {
+        let directions: Vec<Vec3> = (0..directions)
+            .map(|_| rng.cube().normalize_or_zero())
+            .collect();
+        let points: Vec<PointMatch> = (0..points)
+            .map(|_| PointMatch {
+                position: rng.cube() * 3.0,
+                reach: rng.range(0.5, 6.0),
+            })
+            .collect();
+        let exponent = rng.range(0.5, 400.0);
+        BurnState::new(&directions, points, exponent, 29)
+    }
+
     #[test]
     fn burn_intensity_lanes_are_the_scalar_intensity_bit_for_bit() {
         let mut rng = Lcg::new(57);
         for round in 0..200 {
-            let directions: Vec<Vec3> = (0..round % 7)
-                .map(|_| rng.cube().normalize_or_zero())
-                .collect();
-            let points: Vec<PointMatch> = (0..round % 3)
-                .map(|_| PointMatch {
-                    position: rng.cube() * 3.0,
-                    reach: rng.range(0.5, 6.0),
-                })
-                .collect();
-            let exponent = rng.range(0.5, 400.0);
-            let burn = BurnState::new(&directions, points, exponent, 29);
+            let burn = random_burn(&mut rng, round % 7, round % 3);
             let mut normals = Vec3xN::<4>::default();
             let mut objects = Vec3xN::<4>::default();
             for i in 0..4 {
@@ -2031,7 +2026,7 @@ mod tests {
                 (normals.x[i], normals.y[i], normals.z[i]) = n.into();
                 (objects.x[i], objects.y[i], objects.z[i]) = o.into();
             }
-            let lanes = burn.intensity_lanes(&normals, &objects);
+            let (lanes, _) = burn.intensity_lanes_unless_burnt(&normals, &objects, f32::INFINITY);
             for (i, lane) in lanes.iter().enumerate() {
                 let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
                 assert_eq!(lane.to_bits(), scalar.to_bits(), "round {round} lane {i}");
@@ -2044,17 +2039,7 @@ mod tests {
         let mut rng = Lcg::new(59);
         let max_shell = 29;
         for round in 0..120 {
-            let directions: Vec<Vec3> = (0..1 + round % 6)
-                .map(|_| rng.cube().normalize_or_zero())
-                .collect();
-            let points: Vec<PointMatch> = (0..round % 3)
-                .map(|_| PointMatch {
-                    position: rng.cube() * 3.0,
-                    reach: rng.range(0.5, 6.0),
-                })
-                .collect();
-            let exponent = rng.range(0.5, 400.0);
-            let burn = BurnState::new(&directions, points, exponent, max_shell);
+            let burn = random_burn(&mut rng, 1 + round % 6, round % 3);
             for layer in 0..=max_shell {
                 // Normals whose cosine towards the first match lies a few ulps around the
                 // layer's burnt bound, and random ones.
