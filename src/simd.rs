@@ -97,6 +97,7 @@ impl SimdLevel {
     }
 
     /// The best level this CPU runs (detected once, then cached).
+    #[inline]
     pub fn detected() -> SimdLevel {
         static DETECTED: OnceLock<SimdLevel> = OnceLock::new();
         *DETECTED.get_or_init(|| {
@@ -199,15 +200,19 @@ pub trait Kernel {
 pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
     #[cfg(all(target_arch = "x86_64", not(fuzzing)))]
     {
-        if level >= SimdLevel::Avx512 && x86::has_avx512() {
-            // SAFETY: the features `x86::avx512` enables were detected on this CPU just above.
+        // The CPU's features from the cache (`detected`): some helpers are dispatched once per
+        // quad, where a dozen `is_x86_feature_detected!` tests each time showed in profiles.
+        let detected = SimdLevel::detected();
+        if level >= SimdLevel::Avx512 && detected >= SimdLevel::Avx512 {
+            // SAFETY: the features `x86::avx512` enables were detected on this CPU (`detected`:
+            // `x86::has_avx512`, which checks what `x86::avx512` enables).
             return unsafe { x86::avx512(kernel) };
         }
         if wide_batches_everywhere() {
             return kernel.run::<WIDE_LANES>();
         }
-        if level >= SimdLevel::Avx2 && x86::has_avx2() {
-            // SAFETY: the features `x86::avx2` enables were detected on this CPU just above.
+        if level >= SimdLevel::Avx2 && detected >= SimdLevel::Avx2 {
+            // SAFETY: the features `x86::avx2` enables were detected on this CPU (`detected`).
             return unsafe { x86::avx2(kernel) };
         }
     }

@@ -507,72 +507,67 @@ impl BurnState {
     }
 
     /// [`shading::burn_rule`] of [`BurnState::intensity_at_unit_normal`] on shell `layer` of
-    /// `max_shell` for `N` lanes, lane by lane the same outcome; a lane whose largest cosine towards the matches by
-    /// direction reaches [`BurnState::burnt_from_cosine`] is burnt away without its power, and
-    /// the power is skipped where no lane needs it.
+    /// `max_shell` for a quad's four lanes, lane by lane the same outcome; a lane whose largest
+    /// cosine towards the matches by direction reaches [`BurnState::burnt_from_cosine`] is
+    /// burnt away without its power, and the power is skipped where no lane needs it.
     #[inline(always)]
-    pub fn outcome_lanes<const N: usize>(
+    pub fn quad_outcome(
         &self,
-        unit_normals: &Vec3xN<N>,
-        points: &Vec3xN<N>,
+        unit_normals: &Vec3xN<4>,
+        points: &Vec3xN<4>,
         layer: u32,
         max_shell: u32,
-    ) -> [BurnOutcome; N] {
+    ) -> shading::QuadBurn {
         let burnt_from = self.burnt_from_cosine(layer, max_shell);
-        let (intensity, burnt) =
-            self.intensity_lanes_unless_burnt(unit_normals, points, burnt_from);
-        std::array::from_fn(|i| {
-            if burnt[i] {
-                BurnOutcome::Burnt
-            } else {
-                shading::burn_rule(intensity[i], layer, max_shell)
-            }
-        })
+        let (intensity, surely_burnt) =
+            self.quad_intensity_unless_burnt(unit_normals, points, burnt_from);
+        let mut outcome = shading::burn_rule_x4(intensity, layer, max_shell);
+        outcome.burnt |= surely_burnt;
+        outcome.charred &= !surely_burnt;
+        outcome
     }
 
-    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits (the
-    /// cosines and their largest as plain loops over the lanes, the one power of the matches by
+    /// [`BurnState::intensity_at_unit_normal`] of a quad's four lanes, lane by lane the same
+    /// bits (the cosines and their largest on packed lanes, the one power of the matches by
     /// direction for all lanes at once, skipped where no lane needs it, the matches at points
-    /// lane by lane), and which lanes are surely burnt away because their largest cosine towards
-    /// the matches by direction is at least `burnt_from`: their intensity is left unfinished
-    /// (their power and the matches at points skipped). `burnt_from = +∞` finishes every lane.
+    /// lane by lane), and the mask of lanes surely burnt away because their largest cosine
+    /// towards the matches by direction is at least `burnt_from`: their intensity is left
+    /// unfinished (their power and the matches at points skipped). `burnt_from = +∞` finishes
+    /// every lane.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
-    fn intensity_lanes_unless_burnt<const N: usize>(
+    fn quad_intensity_unless_burnt(
         &self,
-        unit_normals: &Vec3xN<N>,
-        points: &Vec3xN<N>,
+        unit_normals: &Vec3xN<4>,
+        points: &Vec3xN<4>,
         burnt_from: f32,
-    ) -> ([f32; N], [bool; N]) {
-        let mut strongest = [0.0f32; N];
-        let mut burnt = [false; N];
+    ) -> ([f32; 4], u32) {
+        let mut strongest = [0.0f32; 4];
+        let mut burnt = 0u32;
         if !self.cosine_directions.is_empty() {
-            let mut cosine = [f32::NEG_INFINITY; N];
+            let mut cosine = [f32::NEG_INFINITY; 4];
             for &m in &self.cosine_directions {
                 let dot = unit_normals.dot(&Vec3xN::splat(m));
-                for i in 0..N {
+                for i in 0..4 {
                     cosine[i] = cosine[i].max(dot[i]);
                 }
             }
-            let mut needs_power = false;
-            for i in 0..N {
-                burnt[i] = cosine[i] >= burnt_from;
-                needs_power |= cosine[i] >= self.unburnt_below && !burnt[i];
+            let (mut reached, mut lit) = (0u32, 0u32);
+            for i in 0..4 {
+                reached |= u32::from(cosine[i] >= burnt_from) << i;
+                lit |= u32::from(cosine[i] >= self.unburnt_below) << i;
             }
-            if needs_power {
-                let lobe = shading::light_spot_lobe_lanes(cosine, self.exponent);
-                for i in 0..N {
-                    strongest[i] = if cosine[i] >= self.unburnt_below {
-                        lobe[i]
-                    } else {
-                        0.0
-                    };
+            burnt = reached;
+            if lit & !burnt != 0 {
+                let lobe = shading::light_spot_lobe_x4(cosine, self.exponent);
+                for i in 0..4 {
+                    strongest[i] = if lit & (1 << i) != 0 { lobe[i] } else { 0.0 };
                 }
             }
         }
         if !self.points.is_empty() {
-            for i in 0..N {
-                if burnt[i] {
+            for i in 0..4 {
+                if burnt & (1 << i) != 0 {
                     continue;
                 }
                 let (unit_normal, point) = (unit_normals.lane(i), points.lane(i));
@@ -1101,27 +1096,19 @@ fn quad_entry_lanes(
     // The burn's outcome of the four lanes at once (helper lanes too; their result is
     // dropped). No closure here: LLVM kept `Option::map`'s closure out of line, compiled for
     // the baseline (27 % of a burning frame).
-    #[allow(clippy::manual_map)]
-    let outcome = match &p.burn {
-        Some(burn) => Some(quad_burn_outcome(quad, burn, layer)),
-        None => None,
-    };
+    let live = slots.lanes();
+    let mut discarded = 0u32;
+    if let Some(burn) = &p.burn {
+        let outcome = quad_burn_outcome(quad, burn, layer);
+        discarded = outcome.burnt & live;
+        entry.charred = outcome.charred & live;
+        entry.char_factor = outcome.colour_factor;
+    }
     for lane in 0..4 {
-        if slots.lanes() & (1 << lane) == 0 {
+        if live & (1 << lane) == 0 {
             continue;
         }
-        let mut shown = true;
-        if let Some(outcome) = outcome {
-            // `ShadeParams::burn_outcome_at_unit_normal`, found above.
-            match outcome[lane] {
-                BurnOutcome::Burnt => shown = false,
-                BurnOutcome::Charred { colour_factor } => {
-                    entry.charred |= 1 << lane;
-                    entry.char_factor[lane] = colour_factor;
-                }
-                BurnOutcome::Unburnt => {}
-            }
-        }
+        let mut shown = discarded & (1 << lane) == 0;
         if shown && let Some(length_map) = length_map {
             shown = shading::layer_within_length(
                 layer.height_fraction,
@@ -1138,27 +1125,43 @@ fn quad_entry_lanes(
     entry
 }
 
-/// [`BurnState::outcome_lanes`] of a quad's four lanes on `layer`, from their interpolated
-/// normals (normalised here) and object positions.
+/// [`BurnState::quad_outcome`] of a quad's four lanes on `layer`, from their interpolated
+/// normals (normalised here) and object positions (interpolated only where a match stands at
+/// a point: matches by direction read the normal alone).
 #[inline(always)]
 fn quad_burn_outcome(
     quad: &Quad<'_, FurVaryings>,
     burn: &BurnState,
     layer: &LayerParams,
-) -> [BurnOutcome; 4] {
-    let mut unit_normals = Vec3xN::<4>::default();
-    let mut objects = Vec3xN::<4>::default();
-    for lane in 0..4 {
-        let n = quad.field(lane, |v| &v.surface.normal).normalize_or_zero();
-        let o = quad.field(lane, |v| &v.surface.object);
-        (
-            unit_normals.x[lane],
-            unit_normals.y[lane],
-            unit_normals.z[lane],
-        ) = n.into();
-        (objects.x[lane], objects.y[lane], objects.z[lane]) = o.into();
+) -> shading::QuadBurn {
+    let unit_normals = quad_vec3_lanes(quad, |v| v.surface.normal).normalize_or_zero();
+    let objects = if burn.points.is_empty() {
+        Vec3xN::default()
+    } else {
+        quad_vec3_lanes(quad, |v| v.surface.object)
+    };
+    burn.quad_outcome(&unit_normals, &objects, layer.index, layer.max_shell)
+}
+
+/// A `Vec3` varying of a quad's four lanes as lane arrays: component by component
+/// `(a·wa + b·wb) + c·wc`, lane by lane the same bits as [`Quad::field`], in packed registers
+/// (four scalar interpolations and a gather were most of a burning quad's test).
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // lanes as an indexed loop: the form LLVM packs
+fn quad_vec3_lanes(
+    quad: &Quad<'_, FurVaryings>,
+    field: impl Fn(&FurVaryings) -> Vec3,
+) -> Vec3xN<4> {
+    let corners = quad.corners();
+    let (a, b, c) = (field(corners[0]), field(corners[1]), field(corners[2]));
+    let [wa, wb, wc] = quad.weights();
+    let mut out = Vec3xN::<4>::default();
+    for i in 0..4 {
+        out.x[i] = (a.x * wa[i] + b.x * wb[i]) + c.x * wc[i];
+        out.y[i] = (a.y * wa[i] + b.y * wb[i]) + c.y * wc[i];
+        out.z[i] = (a.z * wa[i] + b.z * wb[i]) + c.z * wc[i];
     }
-    burn.outcome_lanes(&unit_normals, &objects, layer.index, layer.max_shell)
+    out
 }
 
 /// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
@@ -1924,6 +1927,41 @@ mod tests {
     }
 
     #[test]
+    fn a_quads_vec3_lanes_are_its_fields_bit_for_bit() {
+        let mut rng = Lcg::new(31);
+        let random = |rng: &mut Lcg| {
+            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
+            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
+            bytemuck::cast::<_, FurVaryings>(floats)
+        };
+        for _ in 0..300 {
+            let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
+            let weights: [[f32; 4]; 3] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rng.range(-1.0, 2.0)));
+            let quad = Quad::new(
+                0,
+                0,
+                [0.5; 4],
+                [&corners[0], &corners[1], &corners[2]],
+                weights,
+            );
+            let normals = quad_vec3_lanes(&quad, |v| v.surface.normal);
+            let objects = quad_vec3_lanes(&quad, |v| v.surface.object);
+            for lane in 0..4 {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(
+                    bits(normals.lane(lane)),
+                    bits(quad.field(lane, |v| &v.surface.normal))
+                );
+                assert_eq!(
+                    bits(objects.lane(lane)),
+                    bits(quad.field(lane, |v| &v.surface.object))
+                );
+            }
+        }
+    }
+
+    #[test]
     fn a_batch_interpolates_each_lane_as_the_whole_lane() {
         batch_lanes_are_whole_lanes::<BATCH_LANES>();
         batch_lanes_are_whole_lanes::<{ crate::simd::WIDE_LANES }>();
@@ -2026,7 +2064,7 @@ mod tests {
                 (normals.x[i], normals.y[i], normals.z[i]) = n.into();
                 (objects.x[i], objects.y[i], objects.z[i]) = o.into();
             }
-            let (lanes, _) = burn.intensity_lanes_unless_burnt(&normals, &objects, f32::INFINITY);
+            let (lanes, _) = burn.quad_intensity_unless_burnt(&normals, &objects, f32::INFINITY);
             for (i, lane) in lanes.iter().enumerate() {
                 let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
                 assert_eq!(lane.to_bits(), scalar.to_bits(), "round {round} lane {i}");
@@ -2063,11 +2101,16 @@ mod tests {
                     (normals.x[i], normals.y[i], normals.z[i]) = n.into();
                     (objects.x[i], objects.y[i], objects.z[i]) = o.into();
                 }
-                let lanes = burn.outcome_lanes(&normals, &objects, layer, max_shell);
-                for (i, lane) in lanes.iter().enumerate() {
+                let lanes = burn.quad_outcome(&normals, &objects, layer, max_shell);
+                assert_eq!(lanes.burnt & lanes.charred, 0);
+                for i in 0..4 {
                     let intensity = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
                     let scalar = shading::burn_rule(intensity, layer, max_shell);
-                    assert_eq!(*lane, scalar, "round {round} layer {layer} lane {i}");
+                    assert_eq!(
+                        lanes.outcome(i),
+                        scalar,
+                        "round {round} layer {layer} lane {i}"
+                    );
                 }
             }
         }

@@ -3,6 +3,7 @@
 //! exponent follows a schedule so the burnt area starts small and spreads.
 
 use glam::Vec3;
+use wide::f32x4;
 
 /// Spot intensities strictly above this burn (thesis 3.4: "if the intensity is greater than
 /// 0.1"); 0.1 itself is unburnt.
@@ -72,6 +73,58 @@ pub fn burn_rule(intensity: f32, shell_index: u32, max_shell: u32) -> BurnOutcom
     }
 }
 
+/// [`burn_rule`] of a quad's four lanes as lane masks (bit `l` for lane `l`): which are burnt
+/// away, which charred and by what factor. Lane by lane the same outcome as the scalar rule
+/// ([`QuadBurn::outcome`] reads one lane back).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuadBurn {
+    /// Lanes burnt away ([`BurnOutcome::Burnt`]).
+    pub burnt: u32,
+    /// Lanes charred ([`BurnOutcome::Charred`]); never a burnt lane.
+    pub charred: u32,
+    /// Each charred lane's factor on the strand colour (meaningless in the other lanes).
+    pub colour_factor: [f32; 4],
+}
+
+impl QuadBurn {
+    /// The outcome of lane `lane` (0..4).
+    pub fn outcome(&self, lane: usize) -> BurnOutcome {
+        let bit = 1 << lane.min(3);
+        if self.burnt & bit != 0 {
+            BurnOutcome::Burnt
+        } else if self.charred & bit != 0 {
+            BurnOutcome::Charred {
+                colour_factor: self.colour_factor[lane.min(3)],
+            }
+        } else {
+            BurnOutcome::Unburnt
+        }
+    }
+}
+
+/// [`burn_rule`] of four intensities on one shell, with the same comparisons and roundings
+/// per lane on four-lane vectors (a quad's burn test runs it for every quad of a burning frame).
+#[inline(always)]
+pub fn burn_rule_x4(intensity: [f32; 4], shell_index: u32, max_shell: u32) -> QuadBurn {
+    let intensity = f32x4::from(intensity);
+    // `I > 0.1`, false for NaN: the lanes the rule touches.
+    let above = intensity.simd_gt(f32x4::splat(BURN_THRESHOLD));
+    // `min(I, 1)` where `I` is a number above the threshold.
+    let i = intensity.simd_lt(f32x4::ONE).select(intensity, f32x4::ONE);
+    let factor = f32x4::ONE - i;
+    let t = factor * f32x4::splat(max_shell as f32);
+    let burnt = if shell_index > 0 {
+        above.to_bitmask() & t.simd_lt(f32x4::splat(shell_index as f32)).to_bitmask()
+    } else {
+        0
+    };
+    QuadBurn {
+        burnt,
+        charred: above.to_bitmask() & !burnt,
+        colour_factor: factor.to_array(),
+    }
+}
+
 /// An intensity from which [`burn_rule`] surely burns shell `shell_index` of `max_shell` away:
 /// every `I ≥ level` (NaN aside) is [`BurnOutcome::Burnt`]. A shader that knows a lane's
 /// intensity is at least this skips its exact value (`light_spot_cosine_above` turns it into
@@ -134,6 +187,55 @@ pub fn burn_exponent(time: f32, schedule: &BurnSchedule) -> Option<f32> {
 mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
+
+    #[test]
+    fn the_four_lane_rule_is_the_scalar_rule_lane_by_lane() {
+        let mut rng = Lcg::new(71);
+        let mut intensities = vec![
+            f32::NAN,
+            f32::NEG_INFINITY,
+            -1.0,
+            0.0,
+            BURN_THRESHOLD,
+            BURN_THRESHOLD.next_up(),
+            0.5,
+            1.0f32.next_down(),
+            1.0,
+            1.5,
+            f32::INFINITY,
+        ];
+        // Intensities a few ulps around where each shell of 30 turns from charred to burnt.
+        for shell in 0..30u32 {
+            let edge = 1.0 - shell as f32 / 29.0;
+            let (mut below, mut above) = (edge, edge);
+            for _ in 0..4 {
+                (below, above) = (below.next_down(), above.next_up());
+                intensities.extend([below, above]);
+            }
+        }
+        intensities.extend((0..400).map(|_| rng.range(-0.2, 1.2)));
+        for max_shell in [0u32, 1, 29, 99] {
+            for shell in 0..=max_shell {
+                for chunk in intensities.chunks(4) {
+                    let mut lanes = [0.0f32; 4];
+                    lanes[..chunk.len()].copy_from_slice(chunk);
+                    let quad = burn_rule_x4(lanes, shell, max_shell);
+                    assert_eq!(quad.burnt & quad.charred, 0);
+                    for (i, &intensity) in lanes.iter().enumerate() {
+                        let want = burn_rule(intensity, shell, max_shell);
+                        let got = quad.outcome(i);
+                        match (got, want) {
+                            (
+                                BurnOutcome::Charred { colour_factor: a },
+                                BurnOutcome::Charred { colour_factor: b },
+                            ) => assert_eq!(a.to_bits(), b.to_bits(), "{intensity} on {shell}"),
+                            _ => assert_eq!(got, want, "{intensity} on {shell} of {max_shell}"),
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     fn charred(factor: f32) -> BurnOutcome {
         BurnOutcome::Charred {
