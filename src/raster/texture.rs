@@ -425,7 +425,7 @@ fn to_vec4(t: [u8; 4]) -> Vec4 {
 }
 
 #[inline]
-fn address(i: i64, size: u32, mode: AddressMode) -> i64 {
+pub(crate) fn address(i: i64, size: u32, mode: AddressMode) -> i64 {
     let size = i64::from(size);
     match mode {
         // Most coordinates are already inside: skip the division.

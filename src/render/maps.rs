@@ -135,6 +135,62 @@ impl SurfaceMaps {
         }
     }
 
+    /// Whether [`SurfaceMaps::sample`] of `map` reads red 0 everywhere on a triangle with mesh
+    /// uvs `uvs`: every texel of level 0 within two texels (and the uvs' rounding) of the uvs'
+    /// bounding box, through this sampler's addressing, has red 0. A bilinear sample is a
+    /// weighted sum of four such texels, so it is then exactly 0, and so are the samples of
+    /// every point interpolated inside the triangle. `false` for uvs that are not finite or
+    /// not small enough for the bound to hold.
+    pub fn red_is_zero_over(&self, map: &Texture, uvs: [Vec2; 3]) -> bool {
+        let Some(level) = map.level(0) else {
+            return false;
+        };
+        let (lo, hi) = (
+            uvs[0].min(uvs[1]).min(uvs[2]),
+            uvs[0].max(uvs[1]).max(uvs[2]),
+        );
+        // Texel columns (rows) a sample at u reads: ⌊u·W − ½⌋ and the next (bilinear), ⌊u·W⌋
+        // (nearest). Two texels of margin, more where the uvs are large enough that their
+        // interpolation's rounding (a few ulps) reaches a texel.
+        let range = |lo: f32, hi: f32, size: u32| -> Option<(i64, i64)> {
+            let size_f = size as f32;
+            let (a, b) = (lo * size_f, hi * size_f);
+            if !(a.is_finite() && b.is_finite()) || a.abs().max(b.abs()) > (1u32 << 24) as f32 {
+                return None;
+            }
+            let margin = 2.0 + (a.abs().max(b.abs()) * 1.0e-5).floor();
+            Some(((a - margin).floor() as i64, (b + margin).floor() as i64))
+        };
+        let (Some((x0, x1)), Some((y0, y1))) = (
+            range(lo.x, hi.x, level.width()),
+            range(lo.y, hi.y, level.height()),
+        ) else {
+            return false;
+        };
+        let (width, height) = (i64::from(level.width()), i64::from(level.height()));
+        let columns = |from: i64, to: i64, size: i64, mode: AddressMode| -> Vec<usize> {
+            match mode {
+                AddressMode::Clamp => (from.clamp(0, size - 1)..=to.clamp(0, size - 1))
+                    .map(|i| i as usize)
+                    .collect(),
+                AddressMode::Wrap if to - from + 1 >= size => (0..size as usize).collect(),
+                AddressMode::Wrap => (from..=to)
+                    .map(|i| crate::raster::texture::address(i, size as u32, mode) as usize)
+                    .collect(),
+            }
+        };
+        let xs = columns(x0, x1, width, self.sampler.address_u);
+        let ys = columns(y0, y1, height, self.sampler.address_v);
+        let texels = level.texels();
+        ys.iter().all(|&y| {
+            xs.iter().all(|&x| {
+                texels
+                    .get(y * width as usize + x)
+                    .is_some_and(|t| t[0] == 0)
+            })
+        })
+    }
+
     /// A bilinear sample of `map` at mesh uv `uv` (see the module's convention).
     #[inline]
     pub fn sample(&self, map: &Texture, uv: Vec2) -> Vec4 {

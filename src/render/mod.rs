@@ -229,6 +229,46 @@ pub struct PreparedScene {
     lod_order: Vec<u32>,
     /// A glTF model's rig and clip: the mesh is posed again for every frame.
     character: Option<Posing>,
+    /// The mesh's triangles where the maps leave the skin bare, by index in `mesh.indices`
+    /// ([`BARE_BY_DENSITY`], [`BARE_BY_LENGTH`]); `None` where no triangle is.
+    bare: Option<Vec<u8>>,
+}
+
+/// A triangle where the density map is 0 all over: every shell fragment's alpha is 0, so no
+/// shell layer draws anything there.
+const BARE_BY_DENSITY: u8 = 1;
+/// A triangle where the length map is 0 all over: every shell above the root is cut there.
+const BARE_BY_LENGTH: u8 = 2;
+
+/// [`PreparedScene::bare`]: for each triangle of `mesh`, whether the density map (and the
+/// length map) read 0 everywhere on it ([`SurfaceMaps::red_is_zero_over`]).
+fn bare_triangles(mesh: &Mesh, maps: &SurfaceMaps) -> Option<Vec<u8>> {
+    if maps.density.is_none() && maps.length.is_none() {
+        return None;
+    }
+    let uv = |i: u32| mesh.vertices.get(i as usize).map(|v| v.uv);
+    let flags: Vec<u8> = mesh
+        .indices
+        .iter()
+        .map(|t| {
+            let (Some(a), Some(b), Some(c)) = (uv(t[0]), uv(t[1]), uv(t[2])) else {
+                return 0;
+            };
+            let zero = |map: &Option<Texture>| {
+                map.as_ref()
+                    .is_some_and(|m| maps.red_is_zero_over(m, [a, b, c]))
+            };
+            let mut flag = 0;
+            if zero(&maps.density) {
+                flag |= BARE_BY_DENSITY;
+            }
+            if zero(&maps.length) {
+                flag |= BARE_BY_LENGTH;
+            }
+            flag
+        })
+        .collect();
+    flags.iter().any(|&f| f != 0).then_some(flags)
 }
 
 /// What poses a glTF model per frame (see [`crate::mesh::skin`]).
@@ -753,7 +793,6 @@ impl PreparedScene {
         Ok(PreparedScene {
             scene: scene.clone(),
             bounds: bounding_sphere(&mesh),
-            mesh,
             edges,
             warnings,
             shells,
@@ -762,6 +801,8 @@ impl PreparedScene {
             fin_height,
             tile_world_size: tile,
             lod_order: crate::shading::lod_layer_order(n),
+            bare: bare_triangles(&mesh, &maps),
+            mesh,
             maps,
             character,
         })
@@ -1090,9 +1131,10 @@ impl PreparedScene {
                 height_fraction: i as f32 / n as f32,
                 lod_span,
             };
-            // Triangles whose fur is surely burnt away on this layer are not drawn at all: the
-            // image is the same, and burnt fur costs nothing (thesis table 4.6).
-            let kept = self.unburnt_triangles(body, shade, layer.index, max_shell);
+            // Triangles whose fur is surely burnt away on this layer, or bare under the maps,
+            // are not drawn at all: the image is the same, and fur that is not there costs
+            // nothing (thesis table 4.6).
+            let kept = self.drawn_triangles(body, shade, &layer);
             frame.draw_quads(
                 &body.vertices,
                 kept.as_deref().unwrap_or(&body.indices),
@@ -1221,25 +1263,45 @@ impl PreparedScene {
         self.level_of_detail(&self.scene, &self.mesh_at(time), moved)
     }
 
-    /// The mesh's triangles minus those whose fur is surely burnt away on `layer`; `None` when
-    /// nothing burns (draw them all).
-    fn unburnt_triangles(
+    /// The mesh's triangles a shell layer draws: all but those whose fur is surely burnt away
+    /// on the layer and those where the maps leave the skin bare ([`PreparedScene::bare`]: the
+    /// density map 0, on every layer; the length map 0, above the root). `None` when that is
+    /// all of them. The image is the same: every fragment of a triangle left out would be
+    /// discarded.
+    fn drawn_triangles(
         &self,
         body: &Mesh,
         shade: &ShadeParams,
-        layer: u32,
-        max_shell: u32,
+        layer: &LayerParams,
     ) -> Option<Vec<[u32; 3]>> {
-        let burn = shade.burn.as_ref()?;
+        let skipped = match layer.height_fraction > 0.0 {
+            true => BARE_BY_DENSITY | BARE_BY_LENGTH,
+            false => BARE_BY_DENSITY,
+        };
+        // A posed model keeps the rest mesh's triangles (and its uvs, which the flags read).
+        let bare = self
+            .bare
+            .as_deref()
+            .filter(|bare| bare.len() == body.indices.len() && body.indices == self.mesh.indices);
+        let burn = shade.burn.as_ref();
+        if burn.is_none() && bare.is_none() {
+            return None;
+        }
         let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.rest_normal);
+        let burnt = |t: &[u32; 3]| {
+            burn.is_some_and(|burn| match (normal(t[0]), normal(t[1]), normal(t[2])) {
+                (Some(a), Some(b), Some(c)) => {
+                    burn.surely_burnt([a, b, c], layer.index, layer.max_shell)
+                }
+                _ => false,
+            })
+        };
         Some(
             body.indices
                 .iter()
-                .filter(|t| match (normal(t[0]), normal(t[1]), normal(t[2])) {
-                    (Some(a), Some(b), Some(c)) => !burn.surely_burnt([a, b, c], layer, max_shell),
-                    _ => true,
-                })
-                .copied()
+                .enumerate()
+                .filter(|&(k, t)| !(bare.is_some_and(|bare| bare[k] & skipped != 0) || burnt(t)))
+                .map(|(_, t)| *t)
                 .collect(),
         )
     }
@@ -1619,5 +1681,86 @@ mod cancel_tests {
         let result = prepared.render_framebuffer_at(0.0, 16, &flag);
         assert!(matches!(result, Err(RenderError::Cancelled)));
         assert!(!RenderError::Cancelled.is_bad_input());
+    }
+}
+
+#[cfg(test)]
+mod bare_tests {
+    use super::*;
+    use std::path::Path;
+
+    /// A 16×4 map whose red is 0 on the columns `zero` (wrapping), 255 elsewhere, as a PNG in
+    /// `dir`.
+    fn write_map(dir: &Path, name: &str, zero: std::ops::Range<u32>) {
+        let image = image::RgbaImage::from_fn(16, 4, |x, _| {
+            let r = if zero.contains(&x) { 0 } else { 255 };
+            image::Rgba([r, r, r, 255])
+        });
+        image.save(dir.join(name)).expect("writes the map");
+    }
+
+    fn scene(dir: &Path, maps: &str) -> Scene {
+        let text = format!(
+            "[image]\nwidth = 160\nheight = 120\n[mesh]\nkind = \"torus\"\n\
+             [camera]\neye = [0.0, 6.0, 12.0]\n\
+             [fur]\nnumber_of_strands = 300\nnumber_of_shells = 8\ntexture_resolution = 32\n\
+             [maps]\n{maps}\naddress = [\"wrap\", \"clamp\"]\n"
+        );
+        Scene::parse(&text, "<test>", dir).expect("scene")
+    }
+
+    #[test]
+    fn triangles_bare_under_the_maps_are_left_out_without_changing_a_byte() {
+        let dir = std::env::temp_dir().join(format!("pelage-bare-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        write_map(&dir, "density.png", 0..8);
+        write_map(&dir, "length.png", 6..14);
+        for maps in [
+            "density = \"density.png\"",
+            "length = \"length.png\"",
+            "density = \"density.png\"\nlength = \"length.png\"",
+        ] {
+            let mut prepared = PreparedScene::new(&scene(&dir, maps)).expect("prepared");
+            let bare = prepared.bare.clone().expect("some triangles are bare");
+            let drawn = prepared.render(16).expect("renders");
+            prepared.bare = None;
+            let all = prepared.render(16).expect("renders");
+            assert_eq!(drawn.rgba8, all.rgba8, "{maps}");
+            assert!(
+                drawn.stats.triangles < all.stats.triangles,
+                "{maps}: {} triangles drawn against {}",
+                drawn.stats.triangles,
+                all.stats.triangles
+            );
+            assert!(drawn.stats.fragments_shaded < all.stats.fragments_shaded);
+            assert_eq!(drawn.stats.fragments_written, all.stats.fragments_written);
+            // Only triangles whose uvs lie well inside the zero columns are flagged.
+            assert!(bare.contains(&0));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_map_zero_only_in_part_of_a_triangles_reach_leaves_it_drawn() {
+        let maps = SurfaceMaps::none();
+        let texels: Vec<[u8; 4]> = (0..16u32 * 4)
+            .map(|i| {
+                if i % 16 == 6 {
+                    [255, 0, 0, 255]
+                } else {
+                    [0; 4]
+                }
+            })
+            .collect();
+        let map = Texture::from_rgba8(16, 4, texels).expect("texture");
+        // Column 6 covers u in [6/16, 7/16); a bilinear sample reads it within a texel of it.
+        let tri = |u0: f32, u1: f32| [Vec2::new(u0, 0.2), Vec2::new(u1, 0.2), Vec2::new(u0, 0.8)];
+        assert!(maps.red_is_zero_over(&map, tri(0.0, 3.0 / 16.0)));
+        assert!(!maps.red_is_zero_over(&map, tri(0.0, 5.0 / 16.0)));
+        assert!(!maps.red_is_zero_over(&map, tri(7.5 / 16.0, 0.6)));
+        assert!(maps.red_is_zero_over(&map, tri(9.5 / 16.0, 0.9)));
+        assert!(!maps.red_is_zero_over(&map, tri(f32::NAN, 0.1)));
+        // Clamped, a coordinate far outside reads the edge column.
+        assert!(maps.red_is_zero_over(&map, tri(-5.0, -4.0)));
     }
 }
