@@ -552,12 +552,11 @@ impl BurnState {
                     cosine[i] = cosine[i].max(dot[i]);
                 }
             }
-            let (mut reached, mut lit) = (0u32, 0u32);
+            let mut lit = 0u32;
             for i in 0..4 {
-                reached |= u32::from(cosine[i] >= burnt_from) << i;
+                burnt |= u32::from(cosine[i] >= burnt_from) << i;
                 lit |= u32::from(cosine[i] >= self.unburnt_below) << i;
             }
-            burnt = reached;
             if lit & !burnt != 0 {
                 let lobe = shading::light_spot_lobe_x4(cosine, self.exponent);
                 for i in 0..4 {
@@ -1872,14 +1871,17 @@ mod tests {
     use super::*;
     use crate::shading::test_support::Lcg;
 
+    /// A fragment's varyings as floats, each uniform in [−50, 50).
+    fn random_varying_floats(rng: &mut Lcg) -> [f32; FUR_VARYING_FLOATS] {
+        let mut floats = [0.0f32; FUR_VARYING_FLOATS];
+        floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
+        floats
+    }
+
     #[test]
     fn varyings_interpolate_field_by_field() {
         let mut rng = Lcg::new(17);
-        let random = |rng: &mut Lcg| {
-            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
-            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
-            bytemuck::cast::<_, FurVaryings>(floats)
-        };
+        let random = |rng: &mut Lcg| bytemuck::cast::<_, FurVaryings>(random_varying_floats(rng));
         for _ in 0..500 {
             let (a, b, c) = (random(&mut rng), random(&mut rng), random(&mut rng));
             let w = [
@@ -1929,11 +1931,7 @@ mod tests {
     #[test]
     fn a_quads_vec3_lanes_are_its_fields_bit_for_bit() {
         let mut rng = Lcg::new(31);
-        let random = |rng: &mut Lcg| {
-            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
-            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
-            bytemuck::cast::<_, FurVaryings>(floats)
-        };
+        let random = |rng: &mut Lcg| bytemuck::cast::<_, FurVaryings>(random_varying_floats(rng));
         for _ in 0..300 {
             let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
             let weights: [[f32; 4]; 3] =
@@ -1969,11 +1967,7 @@ mod tests {
 
     fn batch_lanes_are_whole_lanes<const N: usize>() {
         let mut rng = Lcg::new(29);
-        let random = |rng: &mut Lcg| {
-            let mut floats = [0.0f32; FUR_VARYING_FLOATS];
-            floats.iter_mut().for_each(|f| *f = rng.range(-50.0, 50.0));
-            floats
-        };
+        let random = random_varying_floats;
         for _ in 0..200 {
             let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
             let weights: [[f32; N]; 3] =
