@@ -50,6 +50,9 @@ fn address(setting: MapAddressSetting) -> AddressMode {
     }
 }
 
+/// The most texels [`SurfaceMaps::red_is_zero_over`] reads for one triangle (64×64).
+const BARE_CHECK_TEXELS: usize = 4096;
+
 /// Reads a PNG map, checking its size from the header before decoding.
 fn load_png(key: &str, path: &Path) -> Result<Texture, MapError> {
     // A regular file of bounded size (a FIFO or device would hang or never end the read).
@@ -140,7 +143,7 @@ impl SurfaceMaps {
     /// bounding box, through this sampler's addressing, has red 0. A bilinear sample is a
     /// weighted sum of four such texels, so it is then exactly 0, and so are the samples of
     /// every point interpolated inside the triangle. `false` for uvs that are not finite or
-    /// not small enough for the bound to hold.
+    /// not small enough for the bound to hold, and for a reach of more than 64×64 texels.
     pub fn red_is_zero_over(&self, map: &Texture, uvs: [Vec2; 3]) -> bool {
         let Some(level) = map.level(0) else {
             return false;
@@ -181,6 +184,12 @@ impl SurfaceMaps {
         };
         let xs = columns(x0, x1, width, self.sampler.address_u);
         let ys = columns(y0, y1, height, self.sampler.address_v);
+        // A bounded cost a triangle (a model of many large triangles over a map that is 0
+        // almost everywhere would read the whole map for each): larger reaches are not
+        // checked, and their triangles are drawn.
+        if xs.len() * ys.len() > BARE_CHECK_TEXELS {
+            return false;
+        }
         let texels = level.texels();
         ys.iter().all(|&y| {
             xs.iter().all(|&x| {

@@ -1279,10 +1279,10 @@ impl PreparedScene {
             false => BARE_BY_DENSITY,
         };
         // A posed model keeps the rest mesh's triangles (and its uvs, which the flags read).
-        let bare = self
-            .bare
-            .as_deref()
-            .filter(|bare| bare.len() == body.indices.len() && body.indices == self.mesh.indices);
+        let bare = self.bare.as_deref().filter(|bare| {
+            std::ptr::eq(body, &self.mesh)
+                || (bare.len() == body.indices.len() && body.indices == self.mesh.indices)
+        });
         let burn = shade.burn.as_ref();
         if burn.is_none() && bare.is_none() {
             return None;
@@ -1760,6 +1760,10 @@ mod bare_tests {
         assert!(!maps.red_is_zero_over(&map, tri(7.5 / 16.0, 0.6)));
         assert!(maps.red_is_zero_over(&map, tri(9.5 / 16.0, 0.9)));
         assert!(!maps.red_is_zero_over(&map, tri(f32::NAN, 0.1)));
+        // A reach over more texels than a triangle's check reads is drawn, even on zeros.
+        let zeros = Texture::from_rgba8(128, 128, vec![[0; 4]; 128 * 128]).expect("texture");
+        assert!(maps.red_is_zero_over(&zeros, tri(0.1, 0.3)));
+        assert!(!maps.red_is_zero_over(&zeros, tri(0.0, 0.9)));
         // Clamped, a coordinate far outside reads the edge column.
         assert!(maps.red_is_zero_over(&map, tri(-5.0, -4.0)));
     }
