@@ -6,7 +6,9 @@
 //! draw's triangles over one tile, with the quad traversal and the fragment stage it calls, all
 //! inlined — is compiled once more for x86-64-v3 and once for x86-64-v4 (AVX-512 F, BW, CD,
 //! DQ, VL) with `#[target_feature]`, and [`dispatch`] runs the copy of the [`SimdLevel`] asked
-//! for, once per tile and draw, never per fragment. The body stays ordinary Rust; only the
+//! for, once per tile and draw, never per fragment. The fur stage of a full batch is a
+//! [`LevelKernel`] of its own, run through [`dispatch_level`] once per batch: one copy a level,
+//! where inlined it was copied at every call site of every fixed-function copy of the quad loop. The body stays ordinary Rust; only the
 //! instruction selection differs (VEX or EVEX encoding, three-operand forms, `blendv` or mask
 //! registers for selects, BMI shifts) and, at AVX-512, the batch width: the kernel runs with
 //! [`WIDE_LANES`] (16) lanes a batch instead of [`LANES`] (8), one 512-bit register of `f32`
@@ -224,12 +226,49 @@ pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
     kernel.run::<LANES>()
 }
 
+/// A part of a [`Kernel`]'s work kept out of line, whose batch width its caller already chose
+/// (a type parameter of the kernel, such as the fur stage of one full batch): compiled once per
+/// level by [`dispatch_level`], not once per level and width. Its [`LevelKernel::run`] must be
+/// `#[inline(always)]`, as must everything hot it calls, as for [`Kernel::run`].
+///
+/// Why out of line: a body inlined into a [`Kernel`] is copied at each of its call sites in each
+/// level's copy (the rasterizer's fixed-function copies of the quad loop each call the shader
+/// two or three times), and the fur stage's copies were most of the library's build time.
+pub trait LevelKernel {
+    /// What the kernel returns.
+    type Output;
+    /// The body. Mark it `#[inline(always)]`.
+    fn run(self) -> Self::Output;
+}
+
+/// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has, as
+/// [`dispatch`] does, without choosing a batch width (`Scalar` and `Sse2` run the baseline).
+#[inline(always)]
+pub fn dispatch_level<K: LevelKernel>(level: SimdLevel, kernel: K) -> K::Output {
+    #[cfg(all(target_arch = "x86_64", not(fuzzing)))]
+    {
+        let detected = SimdLevel::detected();
+        if level >= SimdLevel::Avx512 && detected >= SimdLevel::Avx512 {
+            // SAFETY: the features `x86::avx512_level` enables were detected on this CPU
+            // (`detected`: `x86::has_avx512`, which checks what it enables).
+            return unsafe { x86::avx512_level(kernel) };
+        }
+        if level >= SimdLevel::Avx2 && detected >= SimdLevel::Avx2 {
+            // SAFETY: the features `x86::avx2_level` enables were detected on this CPU.
+            return unsafe { x86::avx2_level(kernel) };
+        }
+    }
+    let _ = level;
+    kernel.run()
+}
+
 /// The environment variable that runs the fur stage's batches [`WIDE_LANES`] wide below
 /// [`SimdLevel::Avx512`] too: `16`, the one value it takes (unset or empty: the level decides).
-/// Those levels then run the baseline copy with 16-lane batches, the portable code of the
-/// AVX-512 copy (without its texture intrinsics), so that a CPU without AVX-512 checks that a
-/// lane's result never depends on the batch's width: `.ci/run` reruns the golden images so.
-/// For checking only; it is slower than the level's own copy.
+/// Those levels then run the baseline copy of the quad traversal with 16-lane batches, and the
+/// fur stage of each batch ([`dispatch_level`]) at the level, 16 lanes wide: the portable code
+/// of the AVX-512 copy (without its texture intrinsics), so that a CPU without AVX-512 checks
+/// that a lane's result never depends on the batch's width: `.ci/run` reruns the golden images
+/// so. For checking only; it is slower than the level's own copy.
 pub const BATCH_LANES_ENV: &str = "PELAGE_BATCH_LANES";
 
 /// An unknown value of [`BATCH_LANES_ENV`].
@@ -266,7 +305,7 @@ fn wide_batches_everywhere() -> bool {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     #[cfg_attr(fuzzing, allow(unused_imports))]
-    use super::{Kernel, LANES, WIDE_LANES};
+    use super::{Kernel, LANES, LevelKernel, WIDE_LANES};
 
     /// x86-64-v3.
     pub(super) fn has_avx2() -> bool {
@@ -302,6 +341,20 @@ mod x86 {
     )]
     pub(super) fn avx512<K: Kernel>(kernel: K) -> K::Output {
         kernel.run::<WIDE_LANES>()
+    }
+
+    #[cfg(not(fuzzing))]
+    #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+    pub(super) fn avx2_level<K: LevelKernel>(kernel: K) -> K::Output {
+        kernel.run()
+    }
+
+    #[cfg(not(fuzzing))]
+    #[target_feature(
+        enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe,avx512f,avx512bw,avx512cd,avx512dq,avx512vl"
+    )]
+    pub(super) fn avx512_level<K: LevelKernel>(kernel: K) -> K::Output {
+        kernel.run()
     }
 }
 
@@ -374,6 +427,14 @@ mod tests {
         }
     }
 
+    impl LevelKernel for Sum<'_> {
+        type Output = f32;
+        #[inline(always)]
+        fn run(self) -> f32 {
+            Kernel::run::<LANES>(self)
+        }
+    }
+
     #[test]
     fn every_level_gives_the_same_bits() {
         let values: Vec<f32> = (0..1000).map(|i| (i as f32 * 0.37).sin() * 1e3).collect();
@@ -381,6 +442,11 @@ mod tests {
         for level in SimdLevel::ALL {
             assert_eq!(
                 dispatch(level, Sum(&values)).to_bits(),
+                baseline.to_bits(),
+                "{level}"
+            );
+            assert_eq!(
+                dispatch_level(level, Sum(&values)).to_bits(),
                 baseline.to_bits(),
                 "{level}"
             );

@@ -836,7 +836,10 @@ pub struct LayerMaps<'a> {
 /// alpha of a layer standing for several ([`shading::lod_alpha`]); the colour map tints the
 /// strand colour before spots ([`shading::tint_strand`]); the lean bends the tangent after the
 /// wind.
-#[inline]
+///
+/// Out of line: the quad stage's copies for each SIMD level and fixed-function state would
+/// otherwise each carry a copy of it, and it runs at the `scalar` level alone (the baseline).
+#[inline(never)]
 pub fn shade_fur(
     f: &Fragment<FurVaryings>,
     textures: LayerMaps<'_>,
@@ -1297,7 +1300,11 @@ impl<'a, const N: usize> FurBatch<'a, N> {
     /// The whole fur stage of the lanes held, each colour written to its lane's slot (a
     /// discarded lane's slot is dropped); the batch is empty after. Lanes past `len` hold what
     /// they held before (or zeros) and run too; their results are dropped.
-    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    ///
+    /// The stage itself runs out of line ([`shade_batch_at_level`]), once per SIMD level, and
+    /// only the writes land at each call site: inlined, the stage was copied at every call site
+    /// of every fixed-function copy of the rasterizer's quad loop (nine a level), and those copies
+    /// were most of the library's build time.
     #[inline(always)]
     pub fn run(
         &mut self,
@@ -1307,10 +1314,31 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
-        let len = self.len;
-        if len == 0 {
+        if self.len == 0 {
             return;
         }
+        let shaded = shade_batch_at_level(self, textures, maps, layer, p);
+        for (i, slot) in self.slots.iter_mut().enumerate() {
+            if let Some(slot) = slot.take()
+                && shaded.kept & (1 << i) != 0
+            {
+                write(slot, shaded.colours[i]);
+            }
+        }
+    }
+
+    /// The fur stage of the lanes held ([`FurBatch::run`]'s work but the writes): the colour
+    /// of every lane, with the lanes kept. The batch holds no lane after.
+    #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+    #[inline(always)]
+    fn shade_lanes(
+        &mut self,
+        textures: LayerMaps<'a>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+    ) -> BatchColours<N> {
+        let len = self.len;
         self.len = 0;
         // Lanes still alive: bit i for lane i.
         let alive = (1u32 << len) - 1;
@@ -1380,31 +1408,22 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             passed |= lane_mask(alpha[i] >= ALPHA_DISCARD) & (1 << i);
         }
         let lit = alive & passed;
-        if lit == 0 {
-            self.slots = [const { None }; N];
-            return;
-        }
-        let mut write_lanes = |slots: &mut [Option<PixelSlot>; N],
-                               colour: &dyn Fn(usize) -> Vec4| {
-            for (i, slot) in slots.iter_mut().enumerate() {
-                if let Some(slot) = slot.take()
-                    && lit & (1 << i) != 0
-                {
-                    write(slot, colour(i));
-                }
-            }
+        // The colour of every lane (lanes not kept too: their values are dropped).
+        let lanes = |colour: &dyn Fn(usize) -> Vec4| BatchColours {
+            kept: lit,
+            colours: std::array::from_fn(colour),
         };
+        if lit == 0 {
+            return BatchColours {
+                kept: 0,
+                colours: [Vec4::ZERO; N],
+            };
+        }
         match p.debug_view {
             DebugView::Tangents => {
-                write_lanes(&mut self.slots, &|i| {
-                    Vec4::new(texels[4][i], texels[5][i], texels[6][i], alpha[i])
-                });
-                return;
+                return lanes(&|i| Vec4::new(texels[4][i], texels[5][i], texels[6][i], alpha[i]));
             }
-            DebugView::Alpha => {
-                write_lanes(&mut self.slots, &|i| Vec4::new(1.0, 1.0, 1.0, alpha[i]));
-                return;
-            }
+            DebugView::Alpha => return lanes(&|i| Vec4::new(1.0, 1.0, 1.0, alpha[i])),
             _ => {}
         }
         let mut strand = Vec3xN {
@@ -1480,11 +1499,10 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             }
         }
         if p.debug_view == DebugView::Shadow {
-            write_lanes(&mut self.slots, &|i| {
+            return lanes(&|i| {
                 let g = (1.0 - p.weights.shadow * shadow[i]).clamp(0.0, 1.0);
                 Vec4::new(g, g, g, alpha[i])
             });
-            return;
         }
         // Step 4: the spots, then the burn's charring.
         if !p.spots.is_empty() {
@@ -1534,8 +1552,60 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             &p.weights,
             p.ambient_term,
         );
-        write_lanes(&mut self.slots, &|i| colours.lane(i).extend(alpha[i]));
+        let mut kept = BatchColours {
+            kept: lit,
+            colours: [Vec4::ZERO; N],
+        };
+        for i in 0..N {
+            kept.colours[i] = colours.lane(i).extend(alpha[i]);
+        }
+        kept
     }
+}
+
+/// The colours a [`FurBatch`]'s stage gives its lanes: bit `i` of `kept` for lane `i` kept
+/// (not discarded), its colour `colours[i]`.
+struct BatchColours<const N: usize> {
+    kept: u32,
+    colours: [Vec4; N],
+}
+
+/// [`FurBatch::shade_lanes`] out of line, compiled for the frame's SIMD level
+/// ([`ShadeParams::simd`], through [`crate::simd::dispatch_level`]): one copy a level and batch
+/// width, called once a batch. Every level gives the same bits.
+#[inline(never)]
+fn shade_batch_at_level<'a, const N: usize>(
+    batch: &mut FurBatch<'a, N>,
+    textures: LayerMaps<'a>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+) -> BatchColours<N> {
+    struct Stage<'q, 'a, const N: usize> {
+        batch: &'q mut FurBatch<'a, N>,
+        textures: LayerMaps<'a>,
+        maps: &'q SurfaceMaps,
+        layer: &'q LayerParams,
+        p: &'q ShadeParams,
+    }
+    impl<const N: usize> crate::simd::LevelKernel for Stage<'_, '_, N> {
+        type Output = BatchColours<N>;
+        #[inline(always)]
+        fn run(self) -> BatchColours<N> {
+            self.batch
+                .shade_lanes(self.textures, self.maps, self.layer, self.p)
+        }
+    }
+    crate::simd::dispatch_level(
+        p.simd,
+        Stage {
+            batch,
+            textures,
+            maps,
+            layer,
+            p,
+        },
+    )
 }
 
 /// Which implementation of the fur fragment stage a frame runs. Both give the same bits; the
