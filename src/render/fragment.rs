@@ -1301,7 +1301,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
     /// discarded lane's slot is dropped); the batch is empty after. Lanes past `len` hold what
     /// they held before (or zeros) and run too; their results are dropped.
     ///
-    /// The stage itself runs out of line ([`shade_batch_at_level`]), once per SIMD level, and
+    /// The stage itself runs out of line (`shade_batch_at_level`), once per SIMD level, and
     /// only the writes land at each call site: inlined, the stage was copied at every call site
     /// of every fixed-function copy of the rasterizer's quad loop (nine a level), and those copies
     /// were most of the library's build time.
