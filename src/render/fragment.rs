@@ -1034,7 +1034,7 @@ fn quad_entry(
 
 /// [`quad_entry_lanes`] out of line, so that frames without a burn or length map do not carry
 /// its code in the hot path (inlined, it made them 12–14 % slower), yet compiled for the
-/// frame's SIMD level ([`ShadeParams::simd`], through [`crate::simd::dispatch`]): in the
+/// frame's SIMD level ([`ShadeParams::simd`], through [`crate::simd::dispatch_level`]): in the
 /// baseline its normalisations and four-lane power ran as scalar code, a quarter of a burning
 /// frame's time. Every level gives the same bits.
 #[inline(never)]
@@ -1054,10 +1054,10 @@ fn quad_entry_at_level(
         layer: &'a LayerParams,
         p: &'a ShadeParams,
     }
-    impl crate::simd::Kernel for Entry<'_, '_, '_> {
+    impl crate::simd::LevelKernel for Entry<'_, '_, '_> {
         type Output = QuadEntry;
         #[inline(always)]
-        fn run<const BATCH: usize>(self) -> QuadEntry {
+        fn run(self) -> QuadEntry {
             quad_entry_lanes(
                 self.quad,
                 self.slots,
@@ -1068,7 +1068,7 @@ fn quad_entry_at_level(
             )
         }
     }
-    crate::simd::dispatch(
+    crate::simd::dispatch_level(
         p.simd,
         Entry {
             quad,
