@@ -8,11 +8,11 @@
 //! DQ, VL) with `#[target_feature]`, and [`dispatch`] runs the copy of the [`SimdLevel`] asked
 //! for, once per tile and draw, never per fragment. The fur stage of a full batch is a
 //! [`LevelKernel`] of its own, run through [`dispatch_level`] once per batch: one copy a level,
-//! where inlined it was copied at every call site of every fixed-function copy of the quad loop. The body stays ordinary Rust; only the
-//! instruction selection differs (VEX or EVEX encoding, three-operand forms, `blendv` or mask
-//! registers for selects, BMI shifts) and, at AVX-512, the batch width: the kernel runs with
-//! [`WIDE_LANES`] (16) lanes a batch instead of [`LANES`] (8), one 512-bit register of `f32`
-//! per lane array.
+//! where inlined it was copied at every call site of every fixed-function copy of the quad
+//! loop. The body stays ordinary Rust; only the instruction selection differs (VEX or EVEX
+//! encoding, three-operand forms, `blendv` or mask registers for selects, BMI shifts) and, at
+//! AVX-512, the batch width: the kernel runs with [`WIDE_LANES`] (16) lanes a batch instead of
+//! [`LANES`] (8), one 512-bit register of `f32` per lane array.
 //!
 //! The AVX-512 level, and why 16 lanes pay now. An earlier AVX-512 copy took 24 % more CPU than
 //! the baseline with 4-lane quads, then the same as AVX2 with 8-lane batches and 7–10 % more
