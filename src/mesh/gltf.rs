@@ -171,6 +171,33 @@ fn error(file: &Path, pointer: Option<String>, message: String) -> GltfError {
     }
 }
 
+/// Size of a GLB file's header: magic, version, total length (glTF 2.0, section 4.4.2).
+const GLB_HEADER_BYTES: u32 = 12;
+
+/// The GLB header's total length, checked before the `gltf` crate subtracts the header's size
+/// from it (an arithmetic overflow there on a length under 12, found by the fuzz target).
+fn check_glb_header(bytes: &[u8], file: &Path) -> Result<(), GltfError> {
+    let Some(length) = bytes
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .and_then(|field| <[u8; 4]>::try_from(field).ok())
+        .map(u32::from_le_bytes)
+    else {
+        return Ok(());
+    };
+    if length < GLB_HEADER_BYTES {
+        return Err(error(
+            file,
+            None,
+            format!(
+                "not a readable GLB file: its header gives a total length of {length} bytes, \
+                 less than the {GLB_HEADER_BYTES}-byte header itself"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// `accessors[3].count` as a JSON pointer, `/accessors/3/count`.
 fn json_pointer(path: &str) -> String {
     let mut out = String::from("/");
@@ -185,6 +212,7 @@ fn json_pointer(path: &str) -> String {
 }
 
 fn parse(bytes: &[u8], file: &Path) -> Result<gltf::Gltf, GltfError> {
+    check_glb_header(bytes, file)?;
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| parse_error(e, file))?;
     let root = document.into_json();
@@ -1313,6 +1341,33 @@ mod tests {
         assert_eq!(decode_base64("").unwrap(), b"");
         assert!(decode_base64("a*==").is_none());
         assert!(decode_base64("a").is_none());
+    }
+
+    #[test]
+    fn a_glb_length_shorter_than_its_header_is_refused_by_name() {
+        for length in [0u32, 11] {
+            let mut bytes = b"glTF".to_vec();
+            bytes.extend_from_slice(&2u32.to_le_bytes());
+            bytes.extend_from_slice(&length.to_le_bytes());
+            bytes.extend_from_slice(&[0; 20]);
+            let message = scan_bytes(&bytes, Path::new("short.glb"))
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("short.glb"), "{message}");
+            assert!(
+                message.contains(&format!("total length of {length} bytes")),
+                "{message}"
+            );
+        }
+        // A header whose length is its own size is past this check (the crate then finds no
+        // JSON chunk).
+        let mut bytes = b"glTF".to_vec();
+        bytes.extend_from_slice(&2u32.to_le_bytes());
+        bytes.extend_from_slice(&12u32.to_le_bytes());
+        let message = scan_bytes(&bytes, Path::new("empty.glb"))
+            .unwrap_err()
+            .to_string();
+        assert!(!message.contains("total length"), "{message}");
     }
 
     #[test]
