@@ -572,7 +572,9 @@ fn fins_keep_the_colour_of_the_fur_they_cover() {
         }
         // The one scene measured outside 10 %: figure 3.16's fur, bent to 0.95 of its height
         // and stretched (no pull back), 1.132 (1.330 before the fins' tangents took the wind's
-        // bend); what keeps its fins 13 % brighter is not known.
+        // bend). Part of it is the shells' mip chain, which darkens the sparse top layers'
+        // colour level by level (docs/src/thesis.md, the fins' paragraph); the rest is the
+        // fins' diffuse term against the bent shells', not yet measured apart.
         let tolerance = if name == "excessive-bending" {
             0.15
         } else {
