@@ -172,10 +172,13 @@ fn level_of_detail_changes_smoothly_with_distance() {
             distances[k + 1]
         );
     }
-    // And at every distance the LOD image stays close to the full one.
+    // And at every distance the LOD image stays close to the full one: at most 4.06 here
+    // (27.25), 1.38 at 11.5. It was 2.99 at most while the mip levels darkened the sparse top
+    // layers the LOD fades out, so dropping them changed less; they now keep their colour
+    // (docs/src/conventions.md, "Textures").
     for (k, (plain, lod)) in frames.iter().enumerate() {
         let apart = mean_difference(plain, lod);
-        assert!(apart < 3.5, "distance {}: {apart:.3}", distances[k]);
+        assert!(apart < 4.5, "distance {}: {apart:.3}", distances[k]);
     }
 }
 

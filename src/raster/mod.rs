@@ -28,7 +28,7 @@ pub use framebuffer::Framebuffer;
 pub use pipeline::Frame;
 pub use setup::CullMode;
 pub use state::{BlendMode, DepthCompare, DrawState};
-pub use texture::{AddressMode, Filter, Sampler, Texture};
+pub use texture::{AddressMode, Filter, MipFilter, Sampler, Texture};
 pub use tile::{Fragment, PerFragment, PixelSlot, Quad, QuadShader, QuadSlots, RasterStats};
 pub use varyings::Varyings;
 

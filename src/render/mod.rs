@@ -20,7 +20,7 @@ use crate::fur::{self, FurParams};
 use crate::mesh::{self, Mesh};
 use crate::raster::{
     AddressMode, BlendMode, ClipVertex, CullMode, DepthCompare, DrawState, Filter, Frame,
-    Framebuffer, RasterError, RasterStats, Sampler, Texture, texture::PairedTexels,
+    Framebuffer, MipFilter, RasterError, RasterStats, Sampler, Texture, texture::PairedTexels,
 };
 use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
 use crate::simd::SimdLevel;
@@ -149,9 +149,19 @@ fn texture(image: &fur::Rgba8Image) -> Result<Texture, RasterError> {
     Texture::from_rgba8(image.width, image.height, image.texels.clone())
 }
 
+/// A fur layer's map: its alpha is the strands' coverage, so its mip levels weight colour by it.
+fn layer_texture(image: &fur::Rgba8Image) -> Result<Texture, RasterError> {
+    Texture::with_mip_filter(
+        image.width,
+        image.height,
+        image.texels.clone(),
+        MipFilter::Coverage,
+    )
+}
+
 impl LayerTextures {
     fn new(colour: &fur::Rgba8Image, tangent: &fur::Rgba8Image) -> Result<Self, RasterError> {
-        let (colour, tangent) = (texture(colour)?, texture(tangent)?);
+        let (colour, tangent) = (layer_texture(colour)?, layer_texture(tangent)?);
         Ok(LayerTextures {
             converted: PairedTexels::new(&colour, &tangent),
             colour,
@@ -517,11 +527,12 @@ pub fn fin_fade(windows: &[[f32; 2]], to_eye: Vec3, normal: Vec3) -> f32 {
 
 /// The part of the fur's height a fin's self-shadow reaches over, and whose shell's lookups it
 /// takes: beside the shells a fin shows mostly the top of the fur (the shells cover the rest), so
-/// it is shadowed as the shell a fifth of the height below the tips is. Measured on the gravity,
-/// torus and leg scenes, fin fur then lies within 10 % of the luminance of the shell fur beside
-/// it (`tests/fins.rs`); with the root shell's lookups over the whole height it was 30–55 %
-/// darker, with none 7–22 % paler.
-pub const FIN_SHADOW_REACH: f32 = 0.2;
+/// it is shadowed as the shell a tenth of the height below the tips is (with 30 shells at
+/// height/5 that shell takes no lookup). Measured on the gravity, torus and leg scenes
+/// (`tests/fins.rs`), fin fur then has 0.96, 1.05 and 1.04 of the luminance of the shell fur
+/// beside it; with a fifth of the height (one lookup at 30 shells) the sphere's was 0.87, with
+/// the root shell's lookups over the whole height 30–55 % darker.
+pub const FIN_SHADOW_REACH: f32 = 0.1;
 
 /// A fin's axes over the edge from `a` to `b`: x along the edge, z the averaged vertex normal
 /// made perpendicular to it (zero when they are parallel or degenerate).
@@ -531,12 +542,12 @@ fn fin_axes(a: &mesh::Vertex, b: &mesh::Vertex) -> (Vec3, Vec3) {
     (x, (up - x * up.dot(x)).normalize_or_zero())
 }
 
-/// A fin corner's wind varying: the world vector `bend` (direction × force; none: zero) in the
-/// fin's frame, times the `fraction` of it the corner takes. The fins' layer bends the tangent by
-/// the whole varying ([`fin_layer_params`]'s height fraction is 1), so a fin whose roots take 0
-/// and whose top edge takes 1 bends each fragment's strand tangent as the shell at its height
-/// bends its own (thesis 3.3.1: the bend grows with the height), up to the top shell's at the
-/// top edge.
+/// A fin corner's wind or lean varying: the world vector `bend` (the wind's direction × force,
+/// or the lean; none: zero) in the fin's frame, times the `fraction` of it the corner takes.
+/// The fins' layer bends the tangent by the whole varying ([`fin_layer_params`]'s height
+/// fraction is 1), so a fin whose roots take 0 and whose top edge takes 1 bends each fragment's
+/// strand tangent as the shell at its height bends its own (thesis 3.3.1: the bend grows with
+/// the height), up to the top shell's at the top edge.
 fn bend_varying(bend: Option<Vec3>, frame: &mesh::frame::TangentFrame, fraction: f32) -> Vec3 {
     bend.map_or(Vec3::ZERO, |b| {
         crate::shading::to_tangent_space(b, frame) * fraction
@@ -1485,8 +1496,13 @@ impl PreparedScene {
                                 light: crate::shading::to_tangent_space(light, &frame),
                                 eye: crate::shading::to_tangent_space(eye - p, &frame),
                                 wind: bend_varying(wind, &frame, bent),
-                                // The lean's bend is left out: see `docs/src/thesis.md`.
-                                lean: Vec3::ZERO,
+                                // The lean (gravity, motion, combing) bends the fin's
+                                // strands as it bends the shells' at the same height.
+                                lean: bend_varying(
+                                    bending.lean.is_some().then(|| bending.lean_at(maps, root)),
+                                    &frame,
+                                    bent,
+                                ),
                             },
                         },
                     ));
