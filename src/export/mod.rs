@@ -22,9 +22,10 @@
 //! Colour maps hold the strand colour and a straight (not premultiplied) alpha. Tangent maps
 //! hold `unorm8(t·0.5 + 0.5)` of the unit strand tangent in tangent space (x = texture u,
 //! y = texture v, z = away from the skin), alpha equal to the colour map's; decode with
-//! `normalize(texel.rgb·2 − 1)`. The mip chain is pelage's own (each texel the rounded mean
-//! `(a + b + c + d + 2) >> 2` of the 2×2 block below it); use the exported levels rather
-//! than the GPU's mip generation to sample the same values.
+//! `normalize(texel.rgb·2 − 1)`. The mip chain is pelage's own (each colour texel the
+//! alpha-weighted mean `(Σ αᵢ·cᵢ + ⌊Σαᵢ/2⌋) / Σαᵢ` of the 2×2 block below it, alpha the rounded
+//! mean `(a + b + c + d + 2) >> 2`; density bands the rounded mean on every channel); use the
+//! exported levels rather than the GPU's mip generation to sample the same values.
 //!
 //! **Beyond the thesis.** Density band textures (`shell_NN_density.png`, with mips, sampled
 //! like the colour map): R, G, B, A = the alpha of the strands in density bands ≤ 0, ≤ 1, ≤ 2,

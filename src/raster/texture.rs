@@ -1,4 +1,5 @@
-//! Textures (raster stage): RGBA8 texels with a box-filtered mip chain, sampled with GPU rules.
+//! Textures (raster stage): RGBA8 texels with a mip chain (box-filtered, or weighted by
+//! coverage), sampled with GPU rules.
 //!
 //! The rules a GPU shader must follow to match (all in f32 unless stated):
 //! - A texel value is `byte / 255`.
