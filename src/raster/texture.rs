@@ -363,8 +363,8 @@ pub enum MipFilter {
     /// texels (whose colour nothing shows) do not pull the colour of the covered ones towards
     /// theirs. The fur layers: their transparent texels hold a neighbour's colour or the empty
     /// colour (black) and tangent, and a plain average darkened a sparse layer's colour level by
-    /// level (the top shells of a fur of 30 kept about a tenth of their colour four levels
-    /// down), so fur seen from afar or at a grazing angle was darker than near fur.
+    /// level (of a fur of 30 shells, layer 25 kept half its colour four levels down, the top
+    /// layer a tenth), so fur seen from afar or at a grazing angle was darker than near fur.
     Coverage,
 }
 
