@@ -485,7 +485,7 @@ fn fins_keep_the_luminance_of_the_pixels_they_change() {
     // ratio goes towards the fur's luminance over the background's. Where the fur already
     // covers a pixel fully without fins the fins changed its luminance by under 1 % (gravity
     // 52.2 → 52.2, specular 136.5 → 136.9, before the mip levels kept the top layers' colour).
-    // The fur on gravity (about 52) is darker than its
+    // The fur on gravity (about 52 then; its colour unblended is 59–60 now) is darker than its
     // background (91), the specular torus's (about 137) brighter than its (26), the tangent
     // view's brighter than black: no fin that adds fur beyond the silhouette keeps this ratio
     // within 10 % on all three. `fins_keep_the_colour_of_the_fur_they_cover` measures the
