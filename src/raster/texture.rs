@@ -26,6 +26,7 @@ use super::RasterError;
 use glam::{Vec2, Vec4};
 use wide::{f32x4, i32x4};
 
+mod alphas512;
 mod pairs512;
 
 /// One mip level: row-major RGBA8 texels, row 0 at v = 0.
@@ -199,7 +200,8 @@ pub struct PairedTexels {
     /// Each level's texel count (its width × height, as in both textures) and its texels.
     levels: Vec<Vec<PairTexel>>,
     /// Each level's alpha bytes of the first texture alone, for the nearest lookups that
-    /// read only alpha ([`NearestLookup::with_converted`]): a quarter of its texels' bytes.
+    /// read only alpha ([`NearestLookup::with_converted`]): a quarter of its texels' bytes,
+    /// then `alphas512::ALPHA_PLANE_PADDING` zeros.
     alphas: Vec<Vec<u8>>,
 }
 
@@ -227,10 +229,17 @@ impl PairedTexels {
                     .collect()
             })
             .collect();
+        // Padded for the 4-byte reads of `alphas512`'s gather.
         let alphas = first
             .levels
             .iter()
-            .map(|l| l.texels.iter().map(|t| t[3]).collect())
+            .map(|l| {
+                l.texels
+                    .iter()
+                    .map(|t| t[3])
+                    .chain([0; alphas512::ALPHA_PLANE_PADDING])
+                    .collect()
+            })
             .collect();
         Some(PairedTexels { levels, alphas })
     }
@@ -1096,11 +1105,9 @@ impl<'a> NearestLookup<'a> {
     /// another level's alphas, which the caller rules out by taking `k` from
     /// [`Texture::nearest_level_index`]).
     pub fn with_converted(mut self, converted: &'a PairedTexels, k: usize) -> Self {
-        if let Some(texels) = converted
-            .alphas
-            .get(k)
-            .filter(|texels| texels.len() == self.level.texels.len())
-        {
+        if let Some(texels) = converted.alphas.get(k).filter(|texels| {
+            texels.len() == self.level.texels.len() + alphas512::ALPHA_PLANE_PADDING
+        }) {
             self.converted = Some(texels.as_slice());
         }
         self
@@ -1114,6 +1121,20 @@ impl NearestLookup<'_> {
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
+        #[cfg(target_arch = "x86_64")]
+        if N == alphas512::LANES
+            && let Some(plane) = self.converted
+            && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
+            && pairs512::available()
+        {
+            let masks = [mask_u.to_array()[0], mask_v.to_array()[0]];
+            // SAFETY: AVX-512 F, BW, DQ and VL were detected just above, `N` is 16, both axes
+            // wrap on the level's power-of-two sizes (`wrap_mask` is `size − 1`), and
+            // `with_converted` took a padded plane of this level's texel count.
+            return unsafe {
+                alphas512::nearest(&u, &v, self.level.width, self.level.height, masks, plane)
+            };
+        }
         // `c·size − 0` is `c·size`, bit for bit: the nearest texel has no half-texel shift.
         let (x, _) = lane_axis(&u, self.u.size[0] as f32, 0.0);
         let (y, _) = lane_axis(&v, self.v.size[0] as f32, 0.0);
@@ -1280,7 +1301,14 @@ mod tests {
     }
 
     #[test]
-    fn nearest_lookups_of_eight_lanes_are_single_lookups() {
+    fn nearest_lookups_of_eight_and_sixteen_lanes_are_single_lookups() {
+        // 16 lanes from the alpha plane of a wrapped level take `alphas512` where the CPU has
+        // AVX-512; the clamped sampler and the 4-byte texels take the portable loops.
+        nearest_lanes_are_single_lookups::<8>();
+        nearest_lanes_are_single_lookups::<16>();
+    }
+
+    fn nearest_lanes_are_single_lookups<const N: usize>() {
         let texels: Vec<[u8; 4]> = (0..64 * 32u32)
             .map(|i| [0, 0, 0, (i * 37 + i / 64) as u8])
             .collect();
@@ -1306,7 +1334,7 @@ mod tests {
                 assert!(wrong.converted.is_none());
                 for k in 0..500u32 {
                     let point = |i: u32| {
-                        let j = k * 8 + i;
+                        let j = k * N as u32 + i;
                         let u = if j.is_multiple_of(13) {
                             specials[(j / 13) as usize % specials.len()]
                         } else {
@@ -1314,9 +1342,9 @@ mod tests {
                         };
                         (u, (j as f32 * 0.414_213_5).fract() * 4.0 - 2.0)
                     };
-                    let (u, v): (Vec<f32>, Vec<f32>) = (0..8).map(point).unzip();
-                    let (u, v): ([f32; 8], [f32; 8]) =
-                        (u.try_into().expect("8"), v.try_into().expect("8"));
+                    let (u, v): (Vec<f32>, Vec<f32>) = (0..N as u32).map(point).unzip();
+                    let (u, v): ([f32; N], [f32; N]) =
+                        (u.try_into().expect("N"), v.try_into().expect("N"));
                     let got = lookup.alpha_lanes(u, v);
                     let alphas = from_alphas.alpha_lanes(u, v);
                     assert_eq!(
@@ -1324,7 +1352,7 @@ mod tests {
                         got.map(f32::to_bits),
                         "alpha plane"
                     );
-                    for i in 0..8 {
+                    for i in 0..N {
                         let want = sampler.alpha_nearest_in(level, Vec2::new(u[i], v[i]));
                         assert_eq!(got[i].to_bits(), want.to_bits(), "({}, {})", u[i], v[i]);
                     }
@@ -1510,8 +1538,13 @@ mod tests {
                 assert_eq!(t.0, want);
                 assert_eq!(converted.alphas[k][i], la.texels[i][3]);
             }
+            let padding = &converted.alphas[k][level.len()..];
+            assert_eq!(padding, [0; alphas512::ALPHA_PLANE_PADDING]);
         }
-        assert_eq!(converted.bytes(), 9 * (60 + 12 + 3 + 1));
+        assert_eq!(
+            converted.bytes(),
+            9 * (60 + 12 + 3 + 1) + 4 * alphas512::ALPHA_PLANE_PADDING
+        );
         assert!(PairedTexels::new(&a, &hashed_texture(12, 6, 7, 2)).is_none());
         let s = Sampler::default();
         let other = PairedTexels::new(&hashed_texture(16, 16, 7, 1), &hashed_texture(16, 16, 7, 2))
