@@ -1501,9 +1501,20 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                     // `shading::shell_shadow_lanes`, step by step.
                     let mut sums =
                         shading::ShadowLanes::new(uvs, offsets, layer.lookups, p.shadow_texel);
-                    for k in 1..=layer.lookups {
-                        let (u, v) = sums.point(k);
-                        sums.add(lookup.alpha_lanes(u, v));
+                    // Up to four lookups read before any is added (the same sum, in the same
+                    // order): their reads overlap instead of each waiting on the last.
+                    let mut k = 1;
+                    while k <= layer.lookups {
+                        let chunk = (layer.lookups - k + 1).min(4) as usize;
+                        let mut alphas = [[0.0f32; N]; 4];
+                        for (j, alpha) in alphas.iter_mut().enumerate().take(chunk) {
+                            let (u, v) = sums.point(k + j as u32);
+                            *alpha = lookup.alpha_lanes(u, v);
+                        }
+                        for alpha in &alphas[..chunk] {
+                            sums.add(*alpha);
+                        }
+                        k += chunk as u32;
                     }
                     shadow = sums.shadow;
                 }
