@@ -26,7 +26,7 @@ use super::RasterError;
 use glam::{Vec2, Vec4};
 use wide::{f32x4, i32x4};
 
-mod alphas512;
+mod alpha_gather;
 mod pairs512;
 
 /// One mip level: row-major RGBA8 texels, row 0 at v = 0.
@@ -201,7 +201,7 @@ pub struct PairedTexels {
     levels: Vec<Vec<PairTexel>>,
     /// Each level's alpha bytes of the first texture alone, for the nearest lookups that
     /// read only alpha ([`NearestLookup::with_converted`]): a quarter of its texels' bytes,
-    /// then `alphas512::ALPHA_PLANE_PADDING` zeros.
+    /// then `alpha_gather::ALPHA_PLANE_PADDING` zeros.
     alphas: Vec<Vec<u8>>,
 }
 
@@ -229,7 +229,7 @@ impl PairedTexels {
                     .collect()
             })
             .collect();
-        // Padded for the 4-byte reads of `alphas512`'s gather.
+        // Padded for the 4-byte reads of `alpha_gather`'s gather.
         let alphas = first
             .levels
             .iter()
@@ -237,7 +237,7 @@ impl PairedTexels {
                 l.texels
                     .iter()
                     .map(|t| t[3])
-                    .chain([0; alphas512::ALPHA_PLANE_PADDING])
+                    .chain([0; alpha_gather::ALPHA_PLANE_PADDING])
                     .collect()
             })
             .collect();
@@ -1106,7 +1106,7 @@ impl<'a> NearestLookup<'a> {
     /// [`Texture::nearest_level_index`]).
     pub fn with_converted(mut self, converted: &'a PairedTexels, k: usize) -> Self {
         if let Some(texels) = converted.alphas.get(k).filter(|texels| {
-            texels.len() == self.level.texels.len() + alphas512::ALPHA_PLANE_PADDING
+            texels.len() == self.level.texels.len() + alpha_gather::ALPHA_PLANE_PADDING
         }) {
             self.converted = Some(texels.as_slice());
         }
@@ -1122,7 +1122,7 @@ impl NearestLookup<'_> {
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
         #[cfg(target_arch = "x86_64")]
-        if N == alphas512::LANES
+        if N == alpha_gather::LANES
             && let Some(plane) = self.converted
             && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
             && pairs512::available()
@@ -1132,7 +1132,26 @@ impl NearestLookup<'_> {
             // wrap on the level's power-of-two sizes (`wrap_mask` is `size − 1`), and
             // `with_converted` took a padded plane of this level's texel count.
             return unsafe {
-                alphas512::nearest(&u, &v, self.level.width, self.level.height, masks, plane)
+                alpha_gather::nearest(&u, &v, self.level.width, self.level.height, masks, plane)
+            };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if N == alpha_gather::AVX2_LANES
+            && let Some(plane) = self.converted
+            && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
+            && alpha_gather::avx2_available()
+        {
+            let masks = [mask_u.to_array()[0], mask_v.to_array()[0]];
+            // SAFETY: AVX2 was detected just above, `N` is 8, and the rest as above.
+            return unsafe {
+                alpha_gather::nearest_avx2(
+                    &u,
+                    &v,
+                    self.level.width,
+                    self.level.height,
+                    masks,
+                    plane,
+                )
             };
         }
         // `c·size − 0` is `c·size`, bit for bit: the nearest texel has no half-texel shift.
@@ -1302,7 +1321,7 @@ mod tests {
 
     #[test]
     fn nearest_lookups_of_eight_and_sixteen_lanes_are_single_lookups() {
-        // 16 lanes from the alpha plane of a wrapped level take `alphas512` where the CPU has
+        // 16 lanes from the alpha plane of a wrapped level take `alpha_gather` where the CPU has
         // AVX-512; the clamped sampler and the 4-byte texels take the portable loops.
         nearest_lanes_are_single_lookups::<8>();
         nearest_lanes_are_single_lookups::<16>();
@@ -1539,11 +1558,11 @@ mod tests {
                 assert_eq!(converted.alphas[k][i], la.texels[i][3]);
             }
             let padding = &converted.alphas[k][level.len()..];
-            assert_eq!(padding, [0; alphas512::ALPHA_PLANE_PADDING]);
+            assert_eq!(padding, [0; alpha_gather::ALPHA_PLANE_PADDING]);
         }
         assert_eq!(
             converted.bytes(),
-            9 * (60 + 12 + 3 + 1) + 4 * alphas512::ALPHA_PLANE_PADDING
+            9 * (60 + 12 + 3 + 1) + 4 * alpha_gather::ALPHA_PLANE_PADDING
         );
         assert!(PairedTexels::new(&a, &hashed_texture(12, 6, 7, 2)).is_none());
         let s = Sampler::default();

@@ -1,15 +1,16 @@
-//! The shell shadow's nearest alpha reads of a 16-lane batch with AVX-512
+//! The shell shadow's nearest alpha reads of a batch with gathers
 //! ([`super::NearestLookup::alpha_lanes`] from a level's alpha plane, where both axes wrap on a
-//! power-of-two size): the coordinates, floors and addressing of the 16 lanes in 512-bit
-//! registers, and the 16 alpha bytes in one gather.
+//! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), 8 with AVX2 ([`nearest_avx2`]), the
+//! coordinates, floors and addressing of the lanes in one register each, and their alpha bytes
+//! in one gather.
 //!
-//! Why intrinsics: written as portable loops, LLVM split the coordinate steps into two 256-bit
-//! halves, widened the row products to 64 bits (`vpmullq`) and read the bytes as 16 scalar
+//! Why intrinsics: written as portable loops, LLVM split the 16-lane coordinate steps into two
+//! 256-bit halves, widened the row products to 64 bits (`vpmullq`) and read the bytes as 16 scalar
 //! loads, each index taken out of a register first and each byte inserted into one after:
 //! about a hundred instructions a lookup of 16 lanes, and on thesis-4-2 a lookup happens 2.7
-//! times a fragment. A gather reads the 16 bytes in one instruction; the alpha plane carries
-//! [`ALPHA_PLANE_PADDING`] bytes after its last texel so that the gather's 4-byte reads stay
-//! inside it.
+//! times a fragment (at 8 lanes, the same scalar loads and inserts). A gather reads the bytes in
+//! one instruction; the alpha plane carries [`ALPHA_PLANE_PADDING`] bytes after its last texel
+//! so that the gather's 4-byte reads stay inside it.
 //!
 //! The same bits as the portable loops: the same IEEE operations in the same order
 //! (`c·size − 0`, the clamp to `±COORDINATE_LIMIT`, a non-finite position as 0, the truncation
@@ -101,5 +102,79 @@ pub(super) unsafe fn nearest<const N: usize>(
     let mut out = [0.0f32; N];
     // SAFETY: `N` is 16: one register fills the array.
     unsafe { _mm512_storeu_ps(out.as_mut_ptr(), alphas) };
+    out
+}
+
+/// Lanes [`nearest_avx2`] takes: a batch of the AVX2 level.
+pub(super) const AVX2_LANES: usize = 8;
+
+/// Whether this CPU has AVX2 (cached), which [`nearest_avx2`] runs.
+#[inline]
+pub(super) fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::sync::OnceLock;
+        static AVAILABLE: OnceLock<bool> = OnceLock::new();
+        *AVAILABLE.get_or_init(|| is_x86_feature_detected!("avx2"))
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
+/// [`nearest`] of an 8-lane batch with AVX2 (256-bit registers, one 8-lane gather): the same
+/// steps and the same bits.
+///
+/// # Safety
+/// The CPU has AVX2 ([`avx2_available`]); `N` is [`AVX2_LANES`]; the rest as [`nearest`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn nearest_avx2<const N: usize>(
+    u: &[f32; N],
+    v: &[f32; N],
+    width: u32,
+    height: u32,
+    [mask_u, mask_v]: [i32; 2],
+    plane: &[u8],
+) -> [f32; N] {
+    assert!(N == AVX2_LANES);
+    let floor_of = |c: &[f32; N], size: u32| -> __m256i {
+        // SAFETY: `N` is 8, one 256-bit register.
+        let c = unsafe { _mm256_loadu_ps(c.as_ptr()) };
+        let position = _mm256_sub_ps(
+            _mm256_mul_ps(c, _mm256_set1_ps(size as f32)),
+            _mm256_setzero_ps(),
+        );
+        let (low, high) = (
+            _mm256_set1_ps(-COORDINATE_LIMIT),
+            _mm256_set1_ps(COORDINATE_LIMIT),
+        );
+        let clamped = _mm256_blendv_ps(position, low, _mm256_cmp_ps::<_CMP_LT_OQ>(position, low));
+        let clamped = _mm256_blendv_ps(clamped, high, _mm256_cmp_ps::<_CMP_GT_OQ>(clamped, high));
+        let magnitude =
+            _mm256_and_si256(_mm256_castps_si256(position), _mm256_set1_epi32(i32::MAX));
+        let finite = _mm256_cmpgt_epi32(_mm256_set1_epi32(0x7f80_0000), magnitude);
+        let x = _mm256_and_ps(clamped, _mm256_castsi256_ps(finite));
+        let truncated = _mm256_cvttps_epi32(x);
+        // All ones (−1) where the truncation rounded up.
+        let rounded_up = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GT_OQ>(
+            _mm256_cvtepi32_ps(truncated),
+            x,
+        ));
+        _mm256_add_epi32(truncated, rounded_up)
+    };
+    let column = _mm256_and_si256(floor_of(u, width), _mm256_set1_epi32(mask_u));
+    let row = _mm256_and_si256(floor_of(v, height), _mm256_set1_epi32(mask_v));
+    let index = _mm256_add_epi32(
+        _mm256_mullo_epi32(row, _mm256_set1_epi32(width as i32)),
+        column,
+    );
+    // SAFETY: as in `nearest`: every 4-byte read is inside the padded plane.
+    let words = unsafe { _mm256_i32gather_epi32::<1>(plane.as_ptr().cast(), index) };
+    let bytes = _mm256_and_si256(words, _mm256_set1_epi32(0xff));
+    let y = _mm256_mul_ps(_mm256_cvtepi32_ps(bytes), _mm256_set1_ps(UNORM8_SCALE));
+    let alphas = _mm256_add_ps(y, _mm256_mul_ps(y, _mm256_set1_ps(UNORM8_CORRECTION)));
+    let mut out = [0.0f32; N];
+    // SAFETY: `N` is 8: one register fills the array.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), alphas) };
     out
 }
