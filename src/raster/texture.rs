@@ -1117,42 +1117,29 @@ impl<'a> NearestLookup<'a> {
 impl NearestLookup<'_> {
     /// [`Sampler::alpha_nearest_in`] at `N` points `(u[i], v[i])` (`N` a multiple of 4), the
     /// same values: the coordinate clamp, the floor and the addressing as plain loops over
-    /// the lanes.
+    /// the lanes, or, from the alpha plane of a level that wraps on power-of-two sizes, as one
+    /// gather of 16 lanes (AVX-512) or 8 (AVX2) where the CPU has it (`alpha_gather`).
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
+        // The gathers where the CPU has them: the alpha plane of a level whose axes both wrap
+        // on power-of-two sizes.
         #[cfg(target_arch = "x86_64")]
-        if N == alpha_gather::LANES
-            && let Some(plane) = self.converted
+        if let Some(plane) = self.converted
             && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
-            && pairs512::available()
         {
             let masks = [mask_u.to_array()[0], mask_v.to_array()[0]];
-            // SAFETY: AVX-512 F, BW, DQ and VL were detected just above, `N` is 16, both axes
-            // wrap on the level's power-of-two sizes (`wrap_mask` is `size − 1`), and
-            // `with_converted` took a padded plane of this level's texel count.
-            return unsafe {
-                alpha_gather::nearest(&u, &v, self.level.width, self.level.height, masks, plane)
-            };
-        }
-        #[cfg(target_arch = "x86_64")]
-        if N == alpha_gather::AVX2_LANES
-            && let Some(plane) = self.converted
-            && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
-            && alpha_gather::avx2_available()
-        {
-            let masks = [mask_u.to_array()[0], mask_v.to_array()[0]];
-            // SAFETY: AVX2 was detected just above, `N` is 8, and the rest as above.
-            return unsafe {
-                alpha_gather::nearest_avx2(
-                    &u,
-                    &v,
-                    self.level.width,
-                    self.level.height,
-                    masks,
-                    plane,
-                )
-            };
+            let (width, height) = (self.level.width, self.level.height);
+            // SAFETY (both calls): the CPU's features were detected just before each, `N` is
+            // the lanes each takes, both axes wrap on the level's power-of-two sizes
+            // (`wrap_mask` is `size − 1`), and `with_converted` took a padded plane of this
+            // level's texel count.
+            if N == alpha_gather::LANES && pairs512::available() {
+                return unsafe { alpha_gather::nearest(&u, &v, width, height, masks, plane) };
+            }
+            if N == alpha_gather::AVX2_LANES && alpha_gather::avx2_available() {
+                return unsafe { alpha_gather::nearest_avx2(&u, &v, width, height, masks, plane) };
+            }
         }
         // `c·size − 0` is `c·size`, bit for bit: the nearest texel has no half-texel shift.
         let (x, _) = lane_axis(&u, self.u.size[0] as f32, 0.0);
