@@ -37,7 +37,7 @@ pub(super) const ALPHA_PLANE_PADDING: usize = 3;
 /// (`width − 1`) and `mask_v` (`height − 1`).
 ///
 /// # Safety
-/// The CPU has AVX-512 F ([`super::pairs512::available`] checks more); `N` is [`LANES`];
+/// The CPU has AVX-512 F, BW, DQ and VL ([`super::pairs512::available`]); `N` is [`LANES`];
 /// `width` and `height` are powers of two with `mask_u = width − 1`, `mask_v = height − 1`;
 /// `plane` holds `width × height + ALPHA_PLANE_PADDING` bytes.
 #[cfg(target_arch = "x86_64")]
