@@ -626,29 +626,51 @@ fn rasterize_quads<V, S, const BATCH: usize, const DEPTH: u8, const BLEND: u8, c
                 Vec4::select(perspective, p[1] * inv, l[1]).to_array(),
                 Vec4::select(perspective, p[2] * inv, l[2]).to_array(),
             ];
-            let z = z.to_array();
             let quad_index = (qy - tile.y0) as usize * tile_width + (qx - tile.x0) as usize;
-            let lane_offsets = [0, 1, tile_width, tile_width + 1];
+            let compare = match DEPTH {
+                LESS => DepthCompare::Less,
+                LESS_EQUAL => DepthCompare::LessEqual,
+                _ => state.depth_compare,
+            };
             // The depth test of all lanes first: lanes are distinct pixels, so testing them
-            // before any is written is the same as testing each just before shading it.
-            let mut passed = 0u32;
-            for lane in 0..4 {
-                if mask & (1 << lane) == 0 {
-                    continue;
-                }
-                let index = quad_index + lane_offsets[lane];
-                let depth_z = z[lane];
-                let pass = match DEPTH {
-                    LESS => depth_z < target.depth[index],
-                    LESS_EQUAL => depth_z <= target.depth[index],
-                    _ => match state.depth_compare {
-                        DepthCompare::Always => true,
-                        DepthCompare::Less => depth_z < target.depth[index],
-                        DepthCompare::LessEqual => depth_z <= target.depth[index],
-                    },
+            // before any is written is the same as testing each just before shading it. A quad
+            // inside the tile (the common one) tests its four lanes in one compare, the same
+            // comparisons as the loop below; the mask drops the lanes not covered.
+            let passed = if rows_mask & columns_mask == 0b1111 {
+                let stored = &target.depth;
+                let below = quad_index + tile_width;
+                let stored = Vec4::new(
+                    stored[quad_index],
+                    stored[quad_index + 1],
+                    stored[below],
+                    stored[below + 1],
+                );
+                let pass = match compare {
+                    DepthCompare::Always => 0b1111,
+                    DepthCompare::Less => z.cmplt(stored).bitmask(),
+                    DepthCompare::LessEqual => z.cmple(stored).bitmask(),
                 };
-                passed |= u32::from(pass) << lane;
-            }
+                pass & mask
+            } else {
+                let z = z.to_array();
+                let lane_offsets = [0, 1, tile_width, tile_width + 1];
+                let mut passed = 0u32;
+                for lane in 0..4 {
+                    if mask & (1 << lane) == 0 {
+                        continue;
+                    }
+                    let (depth_z, stored) =
+                        (z[lane], target.depth[quad_index + lane_offsets[lane]]);
+                    let pass = match compare {
+                        DepthCompare::Always => true,
+                        DepthCompare::Less => depth_z < stored,
+                        DepthCompare::LessEqual => depth_z <= stored,
+                    };
+                    passed |= u32::from(pass) << lane;
+                }
+                passed
+            };
+            let z = z.to_array();
             if passed == 0 {
                 qx += 2;
                 continue;
