@@ -633,43 +633,24 @@ fn rasterize_quads<V, S, const BATCH: usize, const DEPTH: u8, const BLEND: u8, c
                 _ => state.depth_compare,
             };
             // The depth test of all lanes first: lanes are distinct pixels, so testing them
-            // before any is written is the same as testing each just before shading it. A quad
-            // inside the tile (the common one) tests its four lanes in one compare, the same
-            // comparisons as the loop below; the mask drops the lanes not covered.
-            let passed = if rows_mask & columns_mask == 0b1111 {
-                let stored = &target.depth;
-                let below = quad_index + tile_width;
-                let stored = Vec4::new(
-                    stored[quad_index],
-                    stored[quad_index + 1],
-                    stored[below],
-                    stored[below + 1],
-                );
-                let pass = match compare {
+            // before any is written is the same as testing each just before shading it. The
+            // four lanes in one compare: a lane past the tile's right or bottom edge (an odd
+            // image size) reads lane 0's depth instead, in bounds, and the mask drops it.
+            let right = usize::from(columns_mask == 0b1111);
+            let below = if rows_mask == 0b1111 { tile_width } else { 0 };
+            let stored = &target.depth;
+            let stored = Vec4::new(
+                stored[quad_index],
+                stored[quad_index + right],
+                stored[quad_index + below],
+                stored[quad_index + below + right],
+            );
+            let passed = mask
+                & match compare {
                     DepthCompare::Always => 0b1111,
                     DepthCompare::Less => z.cmplt(stored).bitmask(),
                     DepthCompare::LessEqual => z.cmple(stored).bitmask(),
                 };
-                pass & mask
-            } else {
-                let z = z.to_array();
-                let lane_offsets = [0, 1, tile_width, tile_width + 1];
-                let mut passed = 0u32;
-                for lane in 0..4 {
-                    if mask & (1 << lane) == 0 {
-                        continue;
-                    }
-                    let (depth_z, stored) =
-                        (z[lane], target.depth[quad_index + lane_offsets[lane]]);
-                    let pass = match compare {
-                        DepthCompare::Always => true,
-                        DepthCompare::Less => depth_z < stored,
-                        DepthCompare::LessEqual => depth_z <= stored,
-                    };
-                    passed |= u32::from(pass) << lane;
-                }
-                passed
-            };
             let z = z.to_array();
             if passed == 0 {
                 qx += 2;
