@@ -60,9 +60,7 @@ fn render_is_identical_for_threads_and_tiles() {
         files.iter().all(|f| f == &files[0]),
         "renders differ across --threads/--tile"
     );
-    let img = image::load_from_memory(&files[0])
-        .expect("decodes")
-        .to_rgba8();
+    let img = common::decode_rgba8(&files[0]);
     assert_eq!((img.width(), img.height()), (200, 150));
     // The furred torus covers the middle of the image; the corners are background.
     assert_ne!(img.get_pixel(100, 90), img.get_pixel(2, 2));
@@ -305,7 +303,7 @@ fn diagram_draws_every_figure_the_same_every_time() {
     assert!(o.status.success(), "{}", stderr(&o));
     for n in 2..=7 {
         let file = all.join(format!("fig-3-{n}.png"));
-        let img = image::open(&file).expect("decodes").to_rgba8();
+        let img = common::open_rgba8(&file);
         assert_eq!(
             (img.width(), img.height()),
             (960, 540),

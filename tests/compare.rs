@@ -60,7 +60,7 @@ fn an_image_against_itself_is_exact() {
     assert_eq!(json["failures"], serde_json::json!([]));
     // Nothing differs: the heat map holds only the dimmed reference (grey); its legend strip
     // below (the colour scale) is in colour.
-    let map = image::open(&heat).expect("heat map").to_rgba8();
+    let map = common::open_rgba8(&heat);
     let legend = pelage::compare::legend::LEGEND_HEIGHT;
     assert_eq!(map.height(), 90 + legend);
     let region = image::imageops::crop_imm(&map, 0, 0, 120, 90).to_image();
@@ -93,11 +93,8 @@ fn two_different_renders_fail_and_the_heat_map_shows_where() {
     let exact = json["exact_pixels"].as_u64().expect("count");
     assert!(exact < 10800 && exact > 0, "{exact}");
     // Coloured exactly where the renders differ, grey elsewhere.
-    let (ia, ib) = (
-        image::open(&a).expect("a").to_rgba8(),
-        image::open(&b).expect("b").to_rgba8(),
-    );
-    let map = image::open(&heat).expect("heat map").to_rgba8();
+    let (ia, ib) = (common::open_rgba8(&a), common::open_rgba8(&b));
+    let map = common::open_rgba8(&heat);
     for (x, y, p) in image::imageops::crop_imm(&map, 0, 0, 120, 90)
         .to_image()
         .enumerate_pixels()
@@ -112,9 +109,7 @@ fn two_different_renders_fail_and_the_heat_map_shows_where() {
     // The FLIP map of this failing pair is readable: where the renders differ its pixels are
     // bright (FLIP's errors here are mostly 0.01–0.2, which a linear magma scale drew near
     // black, a mean luma of about 20), and where they are equal it is black.
-    let flip = image::open(dir.join("flip.png"))
-        .expect("FLIP map")
-        .to_rgba8();
+    let flip = common::open_rgba8(dir.join("flip.png"));
     assert_eq!(flip.height(), 90 + pelage::compare::legend::LEGEND_HEIGHT);
     let luma = |p: &image::Rgba<u8>| {
         0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])

@@ -114,9 +114,7 @@ fn folders_are_compared_pair_by_pair_worst_first() {
             assert!(out.join(image.as_str().expect("path")).is_file(), "{image}");
         }
     }
-    let heat = image::open(out.join(rows[0]["images"][1].as_str().expect("heat")))
-        .expect("heat")
-        .to_rgba8();
+    let heat = common::open_rgba8(out.join(rows[0]["images"][1].as_str().expect("heat")));
     assert_eq!(
         heat.dimensions(),
         (
@@ -308,7 +306,7 @@ fn the_report_page_loads_in_headless_chromium_with_its_rows_and_images() {
         .output()
         .expect("chromium runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let shot = image::open(&shot).expect("screenshot").to_rgba8();
+    let shot = common::open_rgba8(&shot);
     assert_eq!(shot.dimensions(), (1200, 900));
     // Not a blank page: the verdict cells' colours are there (pass green, fail red).
     let has = |c: [u8; 3]| {

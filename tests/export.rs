@@ -1,6 +1,8 @@
 //! `pelage export`: the folder holds the textures, meshes, parameters and the oracle's render a
 //! GPU implementation needs, and re-reading `scene.json` gives the scene's values.
 
+mod common;
+
 use pelage::scene::Scene;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -94,7 +96,7 @@ fn export_holds_everything_and_the_json_gives_the_scene_back() {
         assert_eq!(layer["index"], i);
         for key in ["colour_texture", "tangent_texture"] {
             let file = dir.join(layer[key].as_str().expect("file"));
-            let img = image::open(&file).expect("texture PNG").to_rgba8();
+            let img = common::open_rgba8(&file);
             assert_eq!(img.width(), scene.fur.texture_resolution);
         }
     }
@@ -103,9 +105,7 @@ fn export_holds_everything_and_the_json_gives_the_scene_back() {
         dir.join(json["fin"]["colour_texture"].as_str().expect("fin"))
             .exists()
     );
-    let render = image::open(dir.join("oracle.png"))
-        .expect("render")
-        .to_rgba8();
+    let render = common::open_rgba8(dir.join("oracle.png"));
     assert_eq!(render.dimensions(), (96, 72));
 
     // The oracle's render in the export is the render of the scene.
@@ -242,24 +242,17 @@ fn export_gives_the_level_of_detail_lean_and_offset_of_the_instant() {
 #[test]
 fn export_holds_the_surface_maps_and_density_bands() {
     let (dir, json) = export_scene("density", &[]);
-    let map = image::open(dir.join(json["maps"]["files"]["density"].as_str().expect("map")))
-        .expect("map PNG")
-        .to_rgba8();
-    let source = image::open(concat!(
+    let map = common::open_rgba8(dir.join(json["maps"]["files"]["density"].as_str().expect("map")));
+    let source = common::open_rgba8(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/maps/density-falloff.png"
-    ))
-    .expect("source map")
-    .to_rgba8();
+    ));
     assert_eq!(map.as_raw(), source.as_raw());
     assert!(json["maps"]["files"]["length"].is_null());
     for layer in json["layers"].as_array().expect("layers") {
-        let bands = image::open(dir.join(layer["density_texture"].as_str().expect("bands")))
-            .expect("bands PNG")
-            .to_rgba8();
-        let colour = image::open(dir.join(layer["colour_texture"].as_str().expect("colour")))
-            .expect("colour PNG")
-            .to_rgba8();
+        let bands = common::open_rgba8(dir.join(layer["density_texture"].as_str().expect("bands")));
+        let colour =
+            common::open_rgba8(dir.join(layer["colour_texture"].as_str().expect("colour")));
         assert_eq!(bands.dimensions(), colour.dimensions());
         // A: the strands of every band, the colour map's alpha.
         assert!(

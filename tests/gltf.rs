@@ -277,9 +277,7 @@ fn scene_json_conventions_hold_on_the_data() {
     }
 
     // Straight alpha: a premultiplied texture never has a channel above its alpha.
-    let colour = image::open(dir.join("textures/shell_05_colour.png"))
-        .expect("texture")
-        .to_rgba8();
+    let colour = common::open_rgba8(dir.join("textures/shell_05_colour.png"));
     assert!(
         colour
             .pixels()

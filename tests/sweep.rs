@@ -76,7 +76,7 @@ fn a_sweep_writes_csv_renders_sheet_and_plot() {
         "point_0000.png",
         "point_0003.png",
     ] {
-        let image = image::open(out.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let image = common::open_rgba8(out.join(file));
         assert!(image.width() > 0);
     }
     // A point's render is the render of the scene with that value.

@@ -3,6 +3,8 @@
 //! The window tests need a display. Without one they say so and pass, unless
 //! `PELAGE_REQUIRE_DISPLAY=1` (CI runs them under `xvfb-run` with it), where no display fails.
 
+mod common;
+
 use glam::Vec3;
 use pelage::render::PreparedScene;
 use pelage::scene::{BurnSettings, DebugView, Scene, SpotKind, SpotSettings, WindSettings};
@@ -288,7 +290,7 @@ mod window {
             (f64::from(w) / f64::from(h) - 1366.0 / 768.0).abs() < 0.01,
             "{w}x{h}"
         );
-        let image = image::open(&shot).expect("screenshot");
+        let image = crate::common::open_rgba8(&shot);
         assert_eq!((image.width(), image.height()), (1366, 768));
         // The real screen, read over the X protocol: xvfb-run's is 1280×1024, narrower than
         // the image, so the window is scaled down there too.

@@ -3,7 +3,7 @@
 
 use pelage::render::PreparedScene;
 use pelage::scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// `scenes/NAME.toml` at another image size.
@@ -15,6 +15,20 @@ pub fn scene(name: &str, width: u32, height: u32) -> Scene {
     scene.image.width = width;
     scene.image.height = height;
     scene
+}
+
+/// Reads an image file as RGBA8 through the library's own decoder ([`pelage::input::read_image`]),
+/// panicking with the file's name. Not `image::open`: that is generic over the reader, so every
+/// test crate calling it would compile every codec again (about 10 s of CPU each in a release
+/// build); the library's copy is compiled once.
+pub fn open_rgba8(path: impl AsRef<Path>) -> image::RgbaImage {
+    pelage::input::read_image(path.as_ref(), "test image").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`open_rgba8`] on a file's bytes already read.
+pub fn decode_rgba8(bytes: &[u8]) -> image::RgbaImage {
+    pelage::input::decode_image(bytes, Path::new("<bytes>"), "test image")
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Runs the `pelage` binary with `args`.
