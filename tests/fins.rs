@@ -452,31 +452,30 @@ fn scenes_with_fins() -> Vec<String> {
 }
 
 /// A scene at 320×240 with fins on or off, over its own background or another.
-fn render_small(name: &str, fins: bool, background: Option<Vec3>) -> RenderedImage {
-    let backgrounds = background.map_or_else(Vec::new, |b| vec![b]);
-    let mut images = render_small_over(name, fins, &backgrounds);
-    images.pop().expect("one image")
-}
-
-/// The scene at 320×240 with fins on or off, over each background (its own when `backgrounds`
-/// is empty), from one bake ([`PreparedScene::render_with`]: the same bytes as baking again).
-fn render_small_over(name: &str, fins: bool, backgrounds: &[Vec3]) -> Vec<RenderedImage> {
+/// The scene at 320×240 with fins on or off, and its bake.
+fn small(name: &str, fins: bool) -> (Scene, PreparedScene) {
     let mut scene = renders_scene(name);
     scene.image.width = 320;
     scene.image.height = 240;
     scene.fur.fins = fins;
     let prepared = PreparedScene::new(&scene).expect("prepares");
-    if backgrounds.is_empty() {
-        return vec![prepared.render(64).expect("renders")];
-    }
-    backgrounds
-        .iter()
-        .map(|&b| {
-            scene.image.background = b;
-            let time = scene.time;
-            prepared.render_with(&scene, time, 64).expect("renders")
-        })
-        .collect()
+    (scene, prepared)
+}
+
+fn render_small(name: &str, fins: bool) -> RenderedImage {
+    small(name, fins).1.render(64).expect("renders")
+}
+
+/// [`render_small`] over black and over white, from one bake ([`PreparedScene::render_with`]:
+/// the same bytes as baking again).
+fn render_small_over_black_and_white(name: &str, fins: bool) -> [RenderedImage; 2] {
+    let (mut scene, prepared) = small(name, fins);
+    [Vec3::ZERO, Vec3::ONE].map(|background| {
+        scene.image.background = background;
+        prepared
+            .render_with(&scene, scene.time, 64)
+            .expect("renders")
+    })
 }
 
 #[test]
@@ -507,10 +506,7 @@ fn fins_keep_the_luminance_of_the_pixels_they_change() {
     assert!(names.len() > 3, "scenes with fins: {names:?}");
     let mut failures = Vec::new();
     for name in &names {
-        let (on, off) = (
-            render_small(name, true, None),
-            render_small(name, false, None),
-        );
+        let (on, off) = (render_small(name, true), render_small(name, false));
         let (mut sum_on, mut sum_off, mut changed) = (0.0f64, 0.0f64, 0usize);
         for (a, b) in on.rgba8.chunks(4).zip(off.rgba8.chunks(4)) {
             if a != b {
@@ -542,14 +538,8 @@ fn fins_keep_the_colour_of_the_fur_they_cover() {
     assert!(names.len() > 3, "scenes with fins: {names:?}");
     let mut failures = Vec::new();
     for name in &names {
-        let over = |fins| {
-            let [k, w]: [RenderedImage; 2] =
-                render_small_over(name, fins, &[Vec3::ZERO, Vec3::ONE])
-                    .try_into()
-                    .unwrap_or_else(|_| panic!("two images"));
-            (k, w)
-        };
-        let ((on_k, on_w), (off_k, off_w)) = (over(true), over(false));
+        let [on_k, on_w] = render_small_over_black_and_white(name, true);
+        let [off_k, off_w] = render_small_over_black_and_white(name, false);
         let alpha = |k: &[u8], w: &[u8]| 1.0 - (luminance(w) - luminance(k)) / 255.0;
         let (mut fur_on, mut cover_on, mut fur_off, mut cover_off) = (0.0f64, 0.0, 0.0, 0.0);
         let (mut compared, mut beyond) = (0usize, 0usize);
