@@ -282,6 +282,40 @@ impl Texture {
         (k, (k + 1).min(self.levels.len() - 1), lod - k as f32)
     }
 
+    /// The lower mip level and the nearest one of a squared footprint `ρ²`
+    /// ([`footprint_squared`]): `trilinear_indices(λ).0` and `nearest_level_index(λ)` of
+    /// `λ = level_of_detail_of_footprint(ρ²)`, the same indices, without the logarithm where
+    /// `ρ²` is a normal number further than [`FOOTPRINT_EXACT_WINDOW`] mantissa steps from a
+    /// power of two (the rest takes the logarithm).
+    ///
+    /// Why that is exact: such a `ρ² = 2^e·(1 + f)` has `½·log2 ρ²` in
+    /// `[e/2 + 1.7·10⁻⁴, (e + 1)/2 − 1.7·10⁻⁴]`, and pelage's `log2` is
+    /// `k + r(m)` with the reduced mantissa's `r(m)` within `2·10⁻⁶` of `log2 m` for every `m`
+    /// (test `log2_of_every_reduced_mantissa_is_close`), rounded once when `k` is added
+    /// (`|k + r| < 129`: an error below `2^-17`). So `λ` lies strictly inside
+    /// `(e/2, (e + 1)/2)`, more than its rounding of `λ + ½` away from either end: `⌊λ⌋ =
+    /// ⌊e/2⌋` and `⌊λ + ½⌋ = ⌊(e + 1)/2⌋`, each clamped to the chain as the clamp of `λ` does.
+    /// The lower level decides which batch a quad's lanes join; their `λ` itself is computed
+    /// in the batch, sixteen lanes at a time.
+    #[inline(always)]
+    pub fn levels_of_footprint(&self, squared: f32) -> (usize, usize) {
+        let bits = squared.to_bits();
+        let biased = bits >> 23;
+        let mantissa = bits & 0x7f_ffff;
+        let far_from_powers =
+            mantissa.wrapping_sub(FOOTPRINT_EXACT_WINDOW) <= 0x7f_ffff - 2 * FOOTPRINT_EXACT_WINDOW;
+        // Positive normal numbers: the biased exponent in 1..=254 with the sign bit clear.
+        if far_from_powers && (1..=254).contains(&biased) {
+            let e = biased as i32 - 127;
+            let max = (self.levels.len() - 1) as i32;
+            let lower = (e >> 1).clamp(0, max) as usize;
+            let nearest = ((e + 1) >> 1).clamp(0, max) as usize;
+            return (lower, nearest);
+        }
+        let lod = level_of_detail_of_footprint(squared);
+        (self.trilinear_indices(lod).0, self.nearest_level_index(lod))
+    }
+
     /// Builds a texture and its mip chain with [`MipFilter::Box`]. Fails when the size is
     /// zero, too large, or does not match the number of texels.
     pub fn from_rgba8(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Result<Self, RasterError> {
@@ -349,6 +383,11 @@ impl Texture {
     /// Mip level `k`, if it exists.
     pub fn level(&self, k: usize) -> Option<&MipLevel> {
         self.levels.get(k)
+    }
+
+    /// The mip chain, level 0 first.
+    pub fn levels(&self) -> &[MipLevel] {
+        &self.levels
     }
 
     /// Width of level 0.
@@ -538,21 +577,46 @@ fn floor_small(x: f32) -> i64 {
 /// which sampling clamps to level 0.
 #[inline]
 pub fn level_of_detail(ddx: Vec2, ddy: Vec2, width: u32, height: u32) -> f32 {
+    level_of_detail_of_footprint(footprint_squared(ddx, ddy, width, height))
+}
+
+/// The squared footprint `ρ² = max(|ddx·size|², |ddy·size|²)` of [`level_of_detail`], NaN
+/// where either derivative's is NaN.
+#[inline]
+pub fn footprint_squared(ddx: Vec2, ddy: Vec2, width: u32, height: u32) -> f32 {
     let size = Vec2::new(width as f32, height as f32);
     let (squared_x, squared_y) = ((ddx * size).length_squared(), (ddy * size).length_squared());
     if squared_x.is_nan() || squared_y.is_nan() {
-        return 0.0;
+        return f32::NAN;
     }
-    // `log2 ρ = ½·log2 ρ²` and `max(√a, √b) = √max(a, b)`: no square root at all.
-    let squared = squared_x.max(squared_y);
-    if squared.is_infinite() {
-        return f32::MAX;
-    }
-    if squared == 0.0 {
-        return f32::NEG_INFINITY;
-    }
-    0.5 * crate::shading::numeric::log2_lane(squared)
+    squared_x.max(squared_y)
 }
+
+/// The level of detail of a squared footprint ([`footprint_squared`]): `½·log2 ρ²` (`log2 ρ =
+/// ½·log2 ρ²` and `max(√a, √b) = √max(a, b)`: no square root at all), NaN → 0, +∞ →
+/// `f32::MAX`, 0 → −∞. The branches are selects, so that a loop of it over lanes vectorises
+/// (the fur stage's batches compute their lanes' levels of detail so).
+#[inline(always)]
+pub fn level_of_detail_of_footprint(squared: f32) -> f32 {
+    let lod = 0.5 * crate::shading::numeric::log2_lane(squared);
+    let lod = if squared == 0.0 {
+        f32::NEG_INFINITY
+    } else {
+        lod
+    };
+    let lod = if squared == f32::INFINITY {
+        f32::MAX
+    } else {
+        lod
+    };
+    if squared.is_nan() { 0.0 } else { lod }
+}
+
+/// Squared footprints within this many steps of the mantissa from a power of two take
+/// [`Texture::levels_of_footprint`]'s exact path: `2^12` steps keep `ρ²` a factor of at least
+/// `1 + 2^-12` from either power of two around it, which keeps `½·log2 ρ²` at least
+/// `1.7·10⁻⁴` from the nearest multiple of ½.
+const FOOTPRINT_EXACT_WINDOW: u32 = 1 << 12;
 
 impl Sampler {
     /// Samples with the filter's rules; `ddx`, `ddy` are the screen derivatives of `uv`
@@ -628,13 +692,28 @@ impl Sampler {
         second: &'a Texture,
         lod: f32,
     ) -> Option<TrilinearPair<'a>> {
+        self.trilinear_pair_at(first, second, first.trilinear_indices(lod))
+    }
+
+    /// [`Sampler::trilinear_pair`] at levels `k` and `k1` with fraction `frac`, as
+    /// [`Texture::trilinear_indices`] gives them. A pair for [`TrilinearPair::sample_lanes`]
+    /// alone, whose lanes bring their own fractions, may take `frac` 0: its levels and
+    /// addressing do not depend on it.
+    #[inline]
+    pub fn trilinear_pair_at<'a>(
+        &self,
+        first: &'a Texture,
+        second: &'a Texture,
+        indices @ (k, k1, _): (usize, usize, f32),
+    ) -> Option<TrilinearPair<'a>> {
         if first.levels.len() != second.levels.len()
             || first.width() != second.width()
             || first.height() != second.height()
+            || k1 >= first.levels.len()
+            || k > k1
         {
             return None;
         }
-        let indices @ (k, k1, _) = first.trilinear_indices(lod);
         Some(TrilinearPair {
             first: self.levels_at(first, indices),
             second: [&second.levels[k], &second.levels[k1]],
@@ -1861,6 +1940,45 @@ mod tests {
             level_of_detail(Vec2::new(0.0, 1.0 / 64.0), one / 1024.0, 16, 16),
             -2.0
         );
+    }
+
+    /// [`Texture::levels_of_footprint`] against the logarithm's levels, on chains of 1, 3, 8
+    /// and 15 levels: every footprint within `FOOTPRINT_EXACT_WINDOW + 64` mantissa steps of
+    /// each power of two (both paths and their border), zeros, subnormals, infinities, NaN,
+    /// and 400,000 random bit patterns.
+    #[test]
+    fn levels_of_footprint_are_those_of_the_level_of_detail() {
+        let textures = [(1, 1), (4, 4), (128, 96), (16384, 1)].map(|(w, h)| {
+            Texture::from_rgba8(w, h, vec![[0; 4]; (w * h) as usize]).expect("texture")
+        });
+        let mut footprints = vec![0.0, -0.0, f32::NAN, f32::INFINITY, f32::MAX, 1e-40, 1e-45];
+        let reach = FOOTPRINT_EXACT_WINDOW + 64;
+        for e in 1..=254u32 {
+            let power = e << 23;
+            footprints.extend((power - reach.min(power)..power + reach).map(f32::from_bits));
+        }
+        let mut state = 0x9e37_79b9_u32;
+        footprints.extend((0..400_000).map(|_| {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            f32::from_bits(state >> 1)
+        }));
+        for texture in &textures {
+            for &squared in &footprints {
+                let lod = level_of_detail_of_footprint(squared);
+                assert_eq!(
+                    texture.levels_of_footprint(squared),
+                    (
+                        texture.trilinear_indices(lod).0,
+                        texture.nearest_level_index(lod)
+                    ),
+                    "ρ² = {squared:e} ({:#x}), λ = {lod}, {} levels",
+                    squared.to_bits(),
+                    texture.level_count()
+                );
+            }
+        }
     }
 
     #[test]

@@ -22,7 +22,10 @@
 //! [`crate::shading::lanes`] for the rest). The golden tests render every scene with both.
 
 use super::maps::SurfaceMaps;
-use crate::raster::texture::{MipLevel, PairedTexels, TrilinearPair, level_of_detail};
+use crate::raster::texture::{
+    MipLevel, PairedTexels, TrilinearPair, footprint_squared, level_of_detail,
+    level_of_detail_of_footprint,
+};
 use crate::raster::{Fragment, PixelSlot, Quad, QuadShader, QuadSlots, Sampler, Texture, Varyings};
 use crate::scene::{
     AmbientTermSetting, DebugView, MatchSetting, PointMatch, Scene, ShadowTexelSetting,
@@ -929,10 +932,12 @@ pub fn shade_fur_quad<'a, const N: usize>(
         Vec2::difference(&uv(1), &origin),
         Vec2::difference(&uv(2), &origin),
     );
-    let lod = level_of_detail(ddx, ddy, textures.colour.width(), textures.colour.height());
-    let (lower, upper, frac) = textures.colour.trilinear_indices(lod);
-    let shadow_index = textures.colour.nearest_level_index(lod);
-    let shadow_level = textures.colour.nearest_level(lod);
+    // The footprint alone chooses the levels the lanes read; the level of detail itself
+    // (`½·log2 ρ²`, a chain of dependent operations) is computed in the batch, all its lanes
+    // at once.
+    let footprint = footprint_squared(ddx, ddy, textures.colour.width(), textures.colour.height());
+    let (lower, shadow_index) = textures.colour.levels_of_footprint(footprint);
+    let shadow_level = &textures.colour.levels()[shadow_index];
     // The lanes of a batch read one pair of mip levels and one shadow level: a quad at others
     // runs what the batch holds first. (One call site of the batch's run per copy of the hot
     // path keeps that copy small.)
@@ -959,20 +964,16 @@ pub fn shade_fur_quad<'a, const N: usize>(
         // kept from batch to batch while that stays.
         if batch.pair_lower != Some(lower) {
             batch.pair_lower = Some(lower);
+            let upper = (lower + 1).min(textures.colour.level_count() - 1);
             batch.pair = textures
                 .sampler
-                .trilinear_pair(textures.colour, textures.tangent, lod)
+                .trilinear_pair_at(textures.colour, textures.tangent, (lower, upper, 0.0))
                 .map(|pair| match textures.converted {
                     Some(converted) => pair.with_converted(converted),
                     None => pair,
                 });
         }
     }
-    let frac = if frac != 0.0 && upper != lower {
-        frac
-    } else {
-        0.0
-    };
     let i = batch.len;
     if i <= N - 4
         && let Some(whole) = slots.take_whole()
@@ -985,8 +986,7 @@ pub fn shade_fur_quad<'a, const N: usize>(
         for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
             lanes[at.clone()].copy_from_slice(quad_lanes);
         }
-        batch.lod[at.clone()].fill(lod);
-        batch.frac[at.clone()].fill(frac);
+        batch.footprint[at.clone()].fill(footprint);
         batch.char_factor[at].copy_from_slice(&entry.char_factor);
         batch.charred |= entry.charred << i;
         batch.len += 4;
@@ -1004,8 +1004,7 @@ pub fn shade_fur_quad<'a, const N: usize>(
         for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
             lanes[i] = quad_lanes[lane];
         }
-        batch.lod[i] = lod;
-        batch.frac[i] = frac;
+        batch.footprint[i] = footprint;
         batch.char_factor[i] = entry.char_factor[lane];
         batch.charred |= ((entry.charred >> lane) & 1) << i;
         batch.len += 1;
@@ -1210,10 +1209,9 @@ pub struct FurBatch<'a, const N: usize> {
     slots: [Option<PixelSlot>; N],
     /// The lanes' triangle and weights, interpolated a component at a time when read.
     varyings: BatchVaryings<N>,
-    /// Each lane's level of detail (its quad's), read where a lane is sampled alone.
-    lod: [f32; N],
-    /// Each lane's blend fraction between the pair's levels.
-    frac: [f32; N],
+    /// Each lane's squared footprint (its quad's, [`footprint_squared`]), from which the batch
+    /// computes the lanes' levels of detail.
+    footprint: [f32; N],
     /// Bit i: lane i is charred by the burn (found when its quad joined).
     charred: u32,
     /// Each charred lane's factor on the strand colour.
@@ -1231,8 +1229,7 @@ impl<const N: usize> Default for FurBatch<'_, N> {
             shadow_index: 0,
             slots: [const { None }; N],
             varyings: BatchVaryings::default(),
-            lod: [0.0; N],
-            frac: [0.0; N],
+            footprint: [0.0; N],
             charred: 0,
             char_factor: [0.0; N],
         }
@@ -1362,23 +1359,34 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             (u[i], v[i]) = (uv_u[i] - wind_uv[0][i], uv_v[i] - wind_uv[1][i]);
         }
         let mesh_uv = |i: usize, [u, v]: &[[f32; N]; 2]| Vec2::new(u[i], v[i]);
+        // Each lane's level of detail, and its fraction between the pair's levels: the
+        // lower level is the batch's, `⌊λ⌋` of every lane clamped to the chain
+        // (`Texture::levels_of_footprint`), so `λ − lower` is `trilinear_indices`' fraction.
+        let lower = self.pair_lower.unwrap_or(0);
+        let top = textures.colour.level_count() - 1;
+        let blends = lower < top;
+        let (top, lower) = (top as f32, lower as f32);
+        let (mut lod, mut frac) = ([0.0f32; N], [0.0f32; N]);
+        for i in 0..N {
+            lod[i] = level_of_detail_of_footprint(self.footprint[i]);
+            // `clamp` without its NaN case: λ is never NaN.
+            let clamped = lod[i].max(0.0).min(top);
+            let f = clamped - lower;
+            frac[i] = if f != 0.0 && blends { f } else { 0.0 };
+        }
         // Step 1 ran as each quad joined (`quad_entry`): the lanes held are not burnt away nor
         // above the painted length; the charred ones are marked.
         let (charred, char_factor) = (self.charred, self.char_factor);
         self.charred = 0;
         // Step 3: the colour and tangent maps.
         let texels = match &self.pair {
-            Some(pair) => pair.sample_lanes(&u, &v, &self.frac),
+            Some(pair) => pair.sample_lanes(&u, &v, &frac),
             None => {
                 let mut texels = [[0.0f32; N]; 8];
                 for i in 0..len {
                     let uv = Vec2::new(u[i], v[i]);
-                    let (colour, tangent) = sampler.sample_level_pair(
-                        textures.colour,
-                        textures.tangent,
-                        uv,
-                        self.lod[i],
-                    );
+                    let (colour, tangent) =
+                        sampler.sample_level_pair(textures.colour, textures.tangent, uv, lod[i]);
                     let both = colour.to_array().into_iter().chain(tangent.to_array());
                     for (channel, value) in texels.iter_mut().zip(both) {
                         channel[i] = value;
@@ -1397,7 +1405,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                 density[i] = d;
                 coverage[i] = match textures.density {
                     Some(bands) => shading::density_alpha(
-                        sampler.sample_level(bands, Vec2::new(u[i], v[i]), self.lod[i]),
+                        sampler.sample_level(bands, Vec2::new(u[i], v[i]), lod[i]),
                         d,
                     ),
                     None => texels[3][i] * d.clamp(0.0, 1.0),
@@ -1471,7 +1479,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                     if lit & (1 << i) == 0 {
                         continue;
                     }
-                    let level = bands.nearest_level(self.lod[i]);
+                    let level = bands.nearest_level(lod[i]);
                     let d = density[i];
                     shadow[i] = shading::shell_shadow(
                         |at| shading::density_alpha(sampler.sample_nearest_in(level, at), d),
