@@ -285,7 +285,7 @@ impl Texture {
     /// The lower mip level and the nearest one of a squared footprint `ρ²`
     /// ([`footprint_squared`]): `trilinear_indices(λ).0` and `nearest_level_index(λ)` of
     /// `λ = level_of_detail_of_footprint(ρ²)`, the same indices, without the logarithm where
-    /// `ρ²` is a normal number further than [`FOOTPRINT_EXACT_WINDOW`] mantissa steps from a
+    /// `ρ²` is a normal number further than 2^12 mantissa steps from a
     /// power of two (the rest takes the logarithm).
     ///
     /// Why that is exact: such a `ρ² = 2^e·(1 + f)` has `½·log2 ρ²` in
