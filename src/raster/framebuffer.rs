@@ -106,12 +106,13 @@ impl Framebuffer {
         &self.grid
     }
 
-    /// Sets every pixel to `colour` and every depth to `depth`.
+    /// Sets every pixel to `colour` and every depth to `depth` (the tiles in parallel, as
+    /// [`Framebuffer::new`] fills them).
     pub fn clear(&mut self, colour: Vec4, depth: f32) {
-        for tile in &mut self.tiles {
+        self.tiles.par_iter_mut().for_each(|tile| {
             tile.colour.fill(colour);
             tile.depth.fill(depth);
-        }
+        });
     }
 
     pub(crate) fn tiles_mut(&mut self) -> &mut [TileTarget] {
