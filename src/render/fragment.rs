@@ -113,7 +113,6 @@ const MESH_UV: usize = component!(surface.mesh_uv);
 const FADE: usize = component!(surface.fade);
 const NORMAL: usize = component!(surface.normal);
 const OBJECT: usize = component!(surface.object);
-#[cfg(test)]
 const LENGTH: usize = component!(surface.length);
 const LIGHT: usize = component!(lit.light);
 const EYE: usize = component!(lit.eye);
@@ -445,6 +444,8 @@ impl BurnState {
     /// Whether every fragment of a triangle with these vertex normals is surely burnt away on
     /// shell `layer` of `max_shell` (so the triangle can be skipped without changing a pixel).
     /// Only matches given by direction are bounded; matches at points never skip a triangle.
+    /// [`BurnState::surely_burnt_cosine`] then [`BurnState::surely_burnt_from`]: a renderer
+    /// that tests a triangle on every layer takes the cosine once.
     ///
     /// Why it is safe: a fragment's normal is the renormalised convex combination of the vertex
     /// normals, whose length is at most 1, so its dot with a match `m` is at least the smallest
@@ -453,18 +454,29 @@ impl BurnState {
     /// [`BurnState::burnt_from_cosine`], from which every fragment is burnt away. The root
     /// layer never burns.
     pub fn surely_burnt(&self, normals: [Vec3; 3], layer: u32, max_shell: u32) -> bool {
+        self.surely_burnt_from(self.surely_burnt_cosine(normals), layer, max_shell)
+    }
+
+    /// The cosine every fragment of a triangle with these vertex normals surely reaches towards
+    /// one match given by direction, less a margin: the largest over those matches of the
+    /// smallest vertex dot `− 1e-5` ([`BurnState::surely_burnt`]); −∞ without such matches.
+    /// It does not depend on the layer.
+    pub fn surely_burnt_cosine(&self, normals: [Vec3; 3]) -> f32 {
+        let unit = normals.map(|n| n.normalize_or_zero());
+        self.directions
+            .iter()
+            .map(|&m| unit.iter().map(|n| n.dot(m)).fold(f32::INFINITY, f32::min) - 1.0e-5)
+            .fold(f32::NEG_INFINITY, f32::max)
+    }
+
+    /// Whether a triangle whose [`BurnState::surely_burnt_cosine`] is `cosine` is surely burnt
+    /// away on shell `layer` of `max_shell`: `cosine > 0` and at least the layer's
+    /// [`BurnState::burnt_from_cosine`]. (Some match's bound passes both tests exactly when
+    /// the largest bound does.)
+    #[inline]
+    pub fn surely_burnt_from(&self, cosine: f32, layer: u32, max_shell: u32) -> bool {
         let burnt_from = self.burnt_from_cosine(layer, max_shell);
-        if burnt_from > 1.0 {
-            return false;
-        }
-        self.directions.iter().any(|&m| {
-            let c = normals
-                .iter()
-                .map(|n| n.normalize_or_zero().dot(m))
-                .fold(f32::INFINITY, f32::min)
-                - 1.0e-5;
-            c > 0.0 && c >= burnt_from
-        })
+        burnt_from <= 1.0 && cosine > 0.0 && cosine >= burnt_from
     }
 
     /// The spot intensity `I` of thesis 3.4 at a surface point (object space, rest pose) with
@@ -510,66 +522,75 @@ impl BurnState {
     }
 
     /// [`shading::burn_rule`] of [`BurnState::intensity_at_unit_normal`] on shell `layer` of
-    /// `max_shell` for a quad's four lanes, lane by lane the same outcome; a lane whose largest
-    /// cosine towards the matches by direction reaches [`BurnState::burnt_from_cosine`] is
-    /// burnt away without its power, and the power is skipped where no lane needs it.
+    /// `max_shell` for `N` lanes, lane by lane the same outcome in the lanes of `live` (the
+    /// others are computed alike but left unfinished); a lane whose largest cosine towards the
+    /// matches by direction reaches [`BurnState::burnt_from_cosine`] is burnt away without its
+    /// power, and the power is skipped where no live lane needs it.
     #[inline(always)]
-    pub fn quad_outcome(
+    pub fn lanes_outcome<const N: usize>(
         &self,
-        unit_normals: &Vec3xN<4>,
-        points: &Vec3xN<4>,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+        live: u32,
         layer: u32,
         max_shell: u32,
-    ) -> shading::QuadBurn {
+    ) -> shading::BurnLanes<N> {
         let burnt_from = self.burnt_from_cosine(layer, max_shell);
         let (intensity, surely_burnt) =
-            self.quad_intensity_unless_burnt(unit_normals, points, burnt_from);
-        let mut outcome = shading::burn_rule_x4(intensity, layer, max_shell);
+            self.intensity_unless_burnt_lanes(unit_normals, points, live, burnt_from);
+        let mut outcome = shading::burn_rule_lanes(intensity, layer, max_shell);
         outcome.burnt |= surely_burnt;
         outcome.charred &= !surely_burnt;
         outcome
     }
 
-    /// [`BurnState::intensity_at_unit_normal`] of a quad's four lanes, lane by lane the same
-    /// bits (the cosines and their largest on packed lanes, the one power of the matches by
-    /// direction for all lanes at once, skipped where no lane needs it, the matches at points
-    /// lane by lane), and the mask of lanes surely burnt away because their largest cosine
-    /// towards the matches by direction is at least `burnt_from`: their intensity is left
-    /// unfinished (their power and the matches at points skipped). `burnt_from = +∞` finishes
-    /// every lane.
+    /// [`BurnState::intensity_at_unit_normal`] of `N` lanes, lane by lane the same bits in the
+    /// lanes of `live` (the cosines and their largest on all lanes at once, the one power of
+    /// the matches by direction for all lanes, skipped where no live lane needs it, the
+    /// matches at points lane by lane), and the mask of lanes surely burnt away because their
+    /// largest cosine towards the matches by direction is at least `burnt_from`: their
+    /// intensity is left unfinished (their power and the matches at points skipped).
+    /// `burnt_from = +∞` finishes every live lane.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
-    fn quad_intensity_unless_burnt(
+    fn intensity_unless_burnt_lanes<const N: usize>(
         &self,
-        unit_normals: &Vec3xN<4>,
-        points: &Vec3xN<4>,
+        unit_normals: &Vec3xN<N>,
+        points: &Vec3xN<N>,
+        live: u32,
         burnt_from: f32,
-    ) -> ([f32; 4], u32) {
-        let mut strongest = [0.0f32; 4];
+    ) -> ([f32; N], u32) {
+        let mut strongest = [0.0f32; N];
         let mut burnt = 0u32;
         if !self.cosine_directions.is_empty() {
-            let mut cosine = [f32::NEG_INFINITY; 4];
+            let mut cosine = [f32::NEG_INFINITY; N];
             for &m in &self.cosine_directions {
-                let dot = unit_normals.dot(&Vec3xN::splat(m));
-                for i in 0..4 {
-                    cosine[i] = cosine[i].max(dot[i]);
+                for i in 0..N {
+                    let dot = (unit_normals.x[i] * m.x + unit_normals.y[i] * m.y)
+                        + unit_normals.z[i] * m.z;
+                    // `f32::max` as a compare and select (a NaN dot keeps the cosine, which is
+                    // never NaN, as `max` does; the two may differ only in the sign of a zero
+                    // cosine, which no test nor power below tells apart).
+                    cosine[i] = if dot > cosine[i] { dot } else { cosine[i] };
                 }
             }
-            let mut lit = 0u32;
-            for i in 0..4 {
-                burnt |= u32::from(cosine[i] >= burnt_from) << i;
-                lit |= u32::from(cosine[i] >= self.unburnt_below) << i;
+            for i in 0..N {
+                burnt |= lane_mask(cosine[i] >= burnt_from) & (1 << i);
             }
-            if lit & !burnt != 0 {
-                let lobe = shading::light_spot_lobe_x4(cosine, self.exponent);
-                for i in 0..4 {
-                    strongest[i] = if lit & (1 << i) != 0 { lobe[i] } else { 0.0 };
+            let mut lit = 0u32;
+            for i in 0..N {
+                lit |= lane_mask(cosine[i] >= self.unburnt_below) & (1 << i);
+            }
+            if lit & !burnt & live != 0 {
+                let lobe = shading::light_spot_lobe_lanes(cosine, self.exponent);
+                for i in 0..N {
+                    strongest[i] = select_bits(lane_mask(lit & (1 << i) != 0), lobe[i], 0.0);
                 }
             }
         }
         if !self.points.is_empty() {
-            for i in 0..4 {
-                if burnt & (1 << i) != 0 {
+            for i in 0..N {
+                if (live & !burnt) & (1 << i) == 0 {
                     continue;
                 }
                 let (unit_normal, point) = (unit_normals.lane(i), points.lane(i));
@@ -905,7 +926,8 @@ fn same_triangle(a: &[usize; 3], b: &[usize; 3]) -> bool {
 /// picks are found here, once; its shaded lanes (their slots and interpolation weights) then
 /// join `batch`, which runs the whole stage on `N` lanes at a time ([`FurBatch`]).
 /// Lanes of quads at other mip levels or of another triangle go to a fresh batch: the one held
-/// is run first.
+/// is run first. Where step 1 has something to test (a burn, a length map), the lanes join
+/// untested and the batch tests them together as it fills ([`FurBatch::enter`]).
 ///
 /// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
 /// the rasterizer's tile replay.
@@ -921,7 +943,6 @@ pub fn shade_fur_quad<'a, const N: usize>(
     p: &ShadeParams,
     mut write: impl FnMut(PixelSlot, Vec4),
 ) {
-    let entry = quad_entry(quad, &mut slots, textures, maps, layer, p);
     if slots.lanes() == 0 {
         return;
     }
@@ -942,7 +963,13 @@ pub fn shade_fur_quad<'a, const N: usize>(
     // runs what the batch holds first. (One call site of the batch's run per copy of the hot
     // path keeps that copy small.)
     let lanes = slots.lanes();
-    let full = batch.len + lanes.count_ones() as usize > N;
+    let count = lanes.count_ones() as usize;
+    // Untested lanes that fill the batch are tested first: the room the lanes dropped leave
+    // is filled before the batch runs.
+    if batch.len + count > N && batch.tested < batch.len && entry_test_needed(&textures, maps, p) {
+        batch.enter(textures, maps, layer, p);
+    }
+    let full = batch.len + count > N;
     // The triangle, known by its corners' addresses: they stay in place and unchanged while
     // the batch lives (one per tile and draw, [`QuadShader::Deferred`]).
     let triangle = quad.corners().map(|c| std::ptr::from_ref(c) as usize);
@@ -986,9 +1013,7 @@ pub fn shade_fur_quad<'a, const N: usize>(
         for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
             lanes[at.clone()].copy_from_slice(quad_lanes);
         }
-        batch.footprint[at.clone()].fill(footprint);
-        batch.char_factor[at].copy_from_slice(&entry.char_factor);
-        batch.charred |= entry.charred << i;
+        batch.footprint[at].fill(footprint);
         batch.len += 4;
         return;
     }
@@ -1005,175 +1030,16 @@ pub fn shade_fur_quad<'a, const N: usize>(
             lanes[i] = quad_lanes[lane];
         }
         batch.footprint[i] = footprint;
-        batch.char_factor[i] = entry.char_factor[lane];
-        batch.charred |= ((entry.charred >> lane) & 1) << i;
         batch.len += 1;
     }
 }
 
-/// What step 1 of the fur stage found for a quad's lanes as they joined a batch.
-struct QuadEntry {
-    /// Bit l: lane l is charred.
-    charred: u32,
-    /// Lane l's factor on the strand colour where charred.
-    char_factor: [f32; 4],
-}
-
-/// Step 1 of the fur stage for one quad's lanes, before they take lanes of a batch (the scalar
-/// twin's order: before any texture read): lanes burnt away on this layer, and shell lanes
-/// above the painted length, are discarded here, so that a burnt or bare region costs this test
-/// alone and the batches stay full of lanes the image shows. Charred lanes are marked.
+/// Whether step 1 of the fur stage has anything to test in this draw: a burn, or a length map
+/// that cuts shells. Where it has, the lanes of a [`FurBatch`] are tested as it fills
+/// ([`FurBatch::enter`]).
 #[inline(always)]
-fn quad_entry(
-    quad: &Quad<'_, FurVaryings>,
-    slots: &mut QuadSlots,
-    textures: LayerMaps<'_>,
-    maps: &SurfaceMaps,
-    layer: &LayerParams,
-    p: &ShadeParams,
-) -> QuadEntry {
-    let length_map = maps.length.as_ref().filter(|_| textures.shell);
-    if p.burn.is_none() && length_map.is_none() {
-        return QuadEntry {
-            charred: 0,
-            char_factor: [1.0; 4],
-        };
-    }
-    quad_entry_at_level(quad, slots, length_map, maps, layer, p)
-}
-
-/// [`quad_entry_lanes`] out of line, so that frames without a burn or length map do not carry
-/// its code in the hot path (inlined, it made them 12–14 % slower), yet compiled for the
-/// frame's SIMD level ([`ShadeParams::simd`], through [`crate::simd::dispatch_level`]): in the
-/// baseline its normalisations and four-lane power ran as scalar code, a quarter of a burning
-/// frame's time. Every level gives the same bits.
-#[inline(never)]
-fn quad_entry_at_level(
-    quad: &Quad<'_, FurVaryings>,
-    slots: &mut QuadSlots,
-    length_map: Option<&Texture>,
-    maps: &SurfaceMaps,
-    layer: &LayerParams,
-    p: &ShadeParams,
-) -> QuadEntry {
-    struct Entry<'q, 'a, 'b> {
-        quad: &'q Quad<'b, FurVaryings>,
-        slots: &'q mut QuadSlots,
-        length_map: Option<&'a Texture>,
-        maps: &'a SurfaceMaps,
-        layer: &'a LayerParams,
-        p: &'a ShadeParams,
-    }
-    impl crate::simd::LevelKernel for Entry<'_, '_, '_> {
-        type Output = QuadEntry;
-        #[inline(always)]
-        fn run(self) -> QuadEntry {
-            quad_entry_lanes(
-                self.quad,
-                self.slots,
-                self.length_map,
-                self.maps,
-                self.layer,
-                self.p,
-            )
-        }
-    }
-    crate::simd::dispatch_level(
-        p.simd,
-        Entry {
-            quad,
-            slots,
-            length_map,
-            maps,
-            layer,
-            p,
-        },
-    )
-}
-
-/// [`quad_entry`]'s work where something burns or a length map cuts shells.
-#[inline(always)]
-fn quad_entry_lanes(
-    quad: &Quad<'_, FurVaryings>,
-    slots: &mut QuadSlots,
-    length_map: Option<&Texture>,
-    maps: &SurfaceMaps,
-    layer: &LayerParams,
-    p: &ShadeParams,
-) -> QuadEntry {
-    let mut entry = QuadEntry {
-        charred: 0,
-        char_factor: [1.0; 4],
-    };
-    // The burn's outcome of the four lanes at once (helper lanes too; their result is
-    // dropped). No closure here: LLVM kept `Option::map`'s closure out of line, compiled for
-    // the baseline (27 % of a burning frame).
-    let live = slots.lanes();
-    let mut discarded = 0u32;
-    if let Some(burn) = &p.burn {
-        let outcome = quad_burn_outcome(quad, burn, layer);
-        discarded = outcome.burnt & live;
-        entry.charred = outcome.charred & live;
-        entry.char_factor = outcome.colour_factor;
-    }
-    for lane in 0..4 {
-        if live & (1 << lane) == 0 {
-            continue;
-        }
-        let mut shown = discarded & (1 << lane) == 0;
-        if shown && let Some(length_map) = length_map {
-            shown = shading::layer_within_length(
-                layer.height_fraction,
-                quad.field(lane, |v| &v.surface.length),
-                maps.sample(length_map, quad.field(lane, |v| &v.surface.mesh_uv))
-                    .x,
-            );
-        }
-        if !shown {
-            // Discarded: its slot is never written.
-            let _ = slots.take(lane);
-        }
-    }
-    entry
-}
-
-/// [`BurnState::quad_outcome`] of a quad's four lanes on `layer`, from their interpolated
-/// normals (normalised here) and object positions (interpolated only where a match stands at
-/// a point: matches by direction read the normal alone).
-#[inline(always)]
-fn quad_burn_outcome(
-    quad: &Quad<'_, FurVaryings>,
-    burn: &BurnState,
-    layer: &LayerParams,
-) -> shading::QuadBurn {
-    let unit_normals = quad_vec3_lanes(quad, |v| v.surface.normal).normalize_or_zero();
-    let objects = if burn.points.is_empty() {
-        Vec3xN::default()
-    } else {
-        quad_vec3_lanes(quad, |v| v.surface.object)
-    };
-    burn.quad_outcome(&unit_normals, &objects, layer.index, layer.max_shell)
-}
-
-/// A `Vec3` varying of a quad's four lanes as lane arrays: component by component
-/// `(a·wa + b·wb) + c·wc`, lane by lane the same bits as [`Quad::field`], in packed registers
-/// (four scalar interpolations and a gather were most of a burning quad's test).
-#[inline(always)]
-#[allow(clippy::needless_range_loop)] // lanes as an indexed loop: the form LLVM packs
-fn quad_vec3_lanes(
-    quad: &Quad<'_, FurVaryings>,
-    field: impl Fn(&FurVaryings) -> Vec3,
-) -> Vec3xN<4> {
-    let corners = quad.corners();
-    let (a, b, c) = (field(corners[0]), field(corners[1]), field(corners[2]));
-    let [wa, wb, wc] = quad.weights();
-    let mut out = Vec3xN::<4>::default();
-    for i in 0..4 {
-        out.x[i] = (a.x * wa[i] + b.x * wb[i]) + c.x * wc[i];
-        out.y[i] = (a.y * wa[i] + b.y * wb[i]) + c.y * wc[i];
-        out.z[i] = (a.z * wa[i] + b.z * wb[i]) + c.z * wc[i];
-    }
-    out
+fn entry_test_needed(textures: &LayerMaps<'_>, maps: &SurfaceMaps, p: &ShadeParams) -> bool {
+    p.burn.is_some() || (textures.shell && maps.length.is_some())
 }
 
 /// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
@@ -1197,6 +1063,9 @@ pub const BATCH_LANES: usize = crate::simd::LANES;
 /// way run on with the others, their results dropped: the batch runs full without compaction.
 pub struct FurBatch<'a, const N: usize> {
     len: usize,
+    /// Lanes `0..tested` passed step 1 ([`FurBatch::enter`]); the lanes after joined since.
+    /// Only read in draws where step 1 tests something ([`entry_test_needed`]).
+    tested: usize,
     /// The lower mip level index of `pair` (`None` before the first quad).
     pair_lower: Option<usize>,
     /// The mip levels the texture reads of the lanes held read (`None`: the colour and
@@ -1212,7 +1081,7 @@ pub struct FurBatch<'a, const N: usize> {
     /// Each lane's squared footprint (its quad's, [`footprint_squared`]), from which the batch
     /// computes the lanes' levels of detail.
     footprint: [f32; N],
-    /// Bit i: lane i is charred by the burn (found when its quad joined).
+    /// Bit i: lane i is charred by the burn (found by [`FurBatch::enter`]).
     charred: u32,
     /// Each charred lane's factor on the strand colour.
     char_factor: [f32; N],
@@ -1223,6 +1092,7 @@ impl<const N: usize> Default for FurBatch<'_, N> {
     fn default() -> Self {
         FurBatch {
             len: 0,
+            tested: 0,
             pair_lower: None,
             pair: None,
             shadow_level: None,
@@ -1305,6 +1175,116 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                 .is_some_and(|held| std::ptr::eq(held, level))
     }
 
+    /// Step 1 of the fur stage (the scalar twin's first, before any texture read) for the lanes
+    /// that joined since the last test: lanes burnt away on this layer, and shell lanes above
+    /// the painted length, are dropped (their slots never written) and the lanes kept close up
+    /// in their order, so that a burnt or bare region costs this test alone and batches run
+    /// full of lanes the image shows; charred lanes are marked.
+    ///
+    /// Runs out of line, compiled for the frame's SIMD level ([`ShadeParams::simd`], through
+    /// [`crate::simd::dispatch_level`]), so that frames without a burn or length map do not
+    /// carry its code in the hot path, and on all `N` lanes at once: a quad at a time, the
+    /// test's chain of dependent operations (normalisation, cosines, power, rule) ran four
+    /// lanes wide once per quad, a quarter of a burning frame.
+    #[inline(never)]
+    fn enter(
+        &mut self,
+        textures: LayerMaps<'_>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+    ) {
+        struct Entry<'q, 'a, 'b, const N: usize> {
+            batch: &'q mut FurBatch<'b, N>,
+            length_map: Option<&'a Texture>,
+            maps: &'a SurfaceMaps,
+            layer: &'a LayerParams,
+            p: &'a ShadeParams,
+        }
+        impl<const N: usize> crate::simd::LevelKernel for Entry<'_, '_, '_, N> {
+            type Output = ();
+            #[inline(always)]
+            fn run(self) {
+                self.batch
+                    .enter_lanes(self.length_map, self.maps, self.layer, self.p);
+            }
+        }
+        let length_map = maps.length.as_ref().filter(|_| textures.shell);
+        crate::simd::dispatch_level(
+            p.simd,
+            Entry {
+                batch: self,
+                length_map,
+                maps,
+                layer,
+                p,
+            },
+        );
+    }
+
+    /// [`FurBatch::enter`]'s work.
+    #[inline(always)]
+    fn enter_lanes(
+        &mut self,
+        length_map: Option<&Texture>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+    ) {
+        let (from, len) = (self.tested, self.len);
+        let below = |lanes: usize| 1u32.checked_shl(lanes as u32).map_or(u32::MAX, |b| b - 1);
+        let untested = below(len) & !below(from);
+        let (mut burnt, mut charred, mut char_factor) = (0u32, 0u32, [1.0f32; N]);
+        if let Some(burn) = &p.burn {
+            // The normals of all lanes at once (lanes not tested here too; their results are
+            // dropped); object positions only where a match stands at a point.
+            let unit_normals = self.varyings.vec3(NORMAL).normalize_or_zero();
+            let objects = if burn.points.is_empty() {
+                Vec3xN::default()
+            } else {
+                self.varyings.vec3(OBJECT)
+            };
+            let outcome = burn.lanes_outcome(
+                &unit_normals,
+                &objects,
+                untested,
+                layer.index,
+                layer.max_shell,
+            );
+            (burnt, charred, char_factor) = (outcome.burnt, outcome.charred, outcome.colour_factor);
+        }
+        let lengths =
+            length_map.map(|_| (self.varyings.component(LENGTH), self.varyings.vec2(MESH_UV)));
+        self.charred &= below(from);
+        let mut kept = from;
+        for i in from..len {
+            let mut shown = burnt & (1 << i) == 0;
+            if shown && let (Some(length_map), Some((length, [u, v]))) = (length_map, &lengths) {
+                shown = shading::layer_within_length(
+                    layer.height_fraction,
+                    length[i],
+                    maps.sample(length_map, Vec2::new(u[i], v[i])).x,
+                );
+            }
+            if !shown {
+                // Dropped: its slot is never written.
+                self.slots[i] = None;
+                continue;
+            }
+            if kept != i {
+                self.slots[kept] = self.slots[i].take();
+                for weights in &mut self.varyings.weights {
+                    weights[kept] = weights[i];
+                }
+                self.footprint[kept] = self.footprint[i];
+            }
+            self.char_factor[kept] = char_factor[i];
+            self.charred |= ((charred >> i) & 1) << kept;
+            kept += 1;
+        }
+        (self.len, self.tested) = (kept, kept);
+    }
+
     /// The whole fur stage of the lanes held, each colour written to its lane's slot (a
     /// discarded lane's slot is dropped); the batch is empty after. Lanes past `len` hold what
     /// they held before (or zeros) and run too; their results are dropped.
@@ -1322,6 +1302,9 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
+        if self.tested < self.len && entry_test_needed(&textures, maps, p) {
+            self.enter(textures, maps, layer, p);
+        }
         if self.len == 0 {
             return;
         }
@@ -1347,7 +1330,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
     ) -> BatchColours<N> {
         let len = self.len;
-        self.len = 0;
+        (self.len, self.tested) = (0, 0);
         // Lanes still alive: bit i for lane i.
         let alive = (1u32 << len) - 1;
         let varyings = &self.varyings;
@@ -1374,7 +1357,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             let f = clamped - lower;
             frac[i] = if f != 0.0 && blends { f } else { 0.0 };
         }
-        // Step 1 ran as each quad joined (`quad_entry`): the lanes held are not burnt away nor
+        // Step 1 ran as the batch filled (`FurBatch::enter`): the lanes held are not burnt away nor
         // above the painted length; the charred ones are marked.
         let (charred, char_factor) = (self.charred, self.char_factor);
         self.charred = 0;
@@ -2029,37 +2012,6 @@ mod tests {
     }
 
     #[test]
-    fn a_quads_vec3_lanes_are_its_fields_bit_for_bit() {
-        let mut rng = Lcg::new(31);
-        let random = |rng: &mut Lcg| bytemuck::cast::<_, FurVaryings>(random_varying_floats(rng));
-        for _ in 0..300 {
-            let corners = [random(&mut rng), random(&mut rng), random(&mut rng)];
-            let weights: [[f32; 4]; 3] =
-                std::array::from_fn(|_| std::array::from_fn(|_| rng.range(-1.0, 2.0)));
-            let quad = Quad::new(
-                0,
-                0,
-                [0.5; 4],
-                [&corners[0], &corners[1], &corners[2]],
-                weights,
-            );
-            let normals = quad_vec3_lanes(&quad, |v| v.surface.normal);
-            let objects = quad_vec3_lanes(&quad, |v| v.surface.object);
-            for lane in 0..4 {
-                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                assert_eq!(
-                    bits(normals.lane(lane)),
-                    bits(quad.field(lane, |v| &v.surface.normal))
-                );
-                assert_eq!(
-                    bits(objects.lane(lane)),
-                    bits(quad.field(lane, |v| &v.surface.object))
-                );
-            }
-        }
-    }
-
-    #[test]
     fn a_batch_interpolates_each_lane_as_the_whole_lane() {
         batch_lanes_are_whole_lanes::<BATCH_LANES>();
         batch_lanes_are_whole_lanes::<{ crate::simd::WIDE_LANES }>();
@@ -2150,15 +2102,21 @@ mod tests {
         let mut rng = Lcg::new(57);
         for round in 0..200 {
             let burn = random_burn(&mut rng, round % 7, round % 3);
-            let mut normals = Vec3xN::<4>::default();
-            let mut objects = Vec3xN::<4>::default();
-            for i in 0..4 {
-                let n = rng.cube().normalize_or_zero();
+            let mut normals = Vec3xN::<16>::default();
+            let mut objects = Vec3xN::<16>::default();
+            for i in 0..16 {
+                // A few exact zeros and opposite normals among the random ones.
+                let n = match i {
+                    0 => Vec3::ZERO,
+                    1 => -burn.cosine_directions.first().copied().unwrap_or(Vec3::X),
+                    _ => rng.cube().normalize_or_zero(),
+                };
                 let o = rng.cube() * 3.0;
                 (normals.x[i], normals.y[i], normals.z[i]) = n.into();
                 (objects.x[i], objects.y[i], objects.z[i]) = o.into();
             }
-            let (lanes, _) = burn.quad_intensity_unless_burnt(&normals, &objects, f32::INFINITY);
+            let (lanes, _) =
+                burn.intensity_unless_burnt_lanes(&normals, &objects, u32::MAX, f32::INFINITY);
             for (i, lane) in lanes.iter().enumerate() {
                 let scalar = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
                 assert_eq!(lane.to_bits(), scalar.to_bits(), "round {round} lane {i}");
@@ -2178,13 +2136,13 @@ mod tests {
                 let m = burn.cosine_directions[0];
                 let side = m.any_orthonormal_vector();
                 let bound = burn.burnt_from_cosine(layer, max_shell);
-                let mut normals = Vec3xN::<4>::default();
-                let mut objects = Vec3xN::<4>::default();
-                for i in 0..4 {
-                    let n = if bound <= 1.0 && i < 3 {
+                let mut normals = Vec3xN::<16>::default();
+                let mut objects = Vec3xN::<16>::default();
+                for i in 0..16 {
+                    let n = if bound <= 1.0 && i < 12 {
                         let mut c = bound;
                         for _ in 0..rng.range(0.0, 6.0) as usize {
-                            c = if i == 0 { c.next_down() } else { c.next_up() };
+                            c = if i % 3 == 0 { c.next_down() } else { c.next_up() };
                         }
                         let c = c.min(1.0);
                         (m * c + side * (1.0 - c * c).max(0.0).sqrt()).normalize_or_zero()
@@ -2195,9 +2153,9 @@ mod tests {
                     (normals.x[i], normals.y[i], normals.z[i]) = n.into();
                     (objects.x[i], objects.y[i], objects.z[i]) = o.into();
                 }
-                let lanes = burn.quad_outcome(&normals, &objects, layer, max_shell);
+                let lanes = burn.lanes_outcome(&normals, &objects, u32::MAX, layer, max_shell);
                 assert_eq!(lanes.burnt & lanes.charred, 0);
-                for i in 0..4 {
+                for i in 0..16 {
                     let intensity = burn.intensity_at_unit_normal(normals.lane(i), objects.lane(i));
                     let scalar = shading::burn_rule(intensity, layer, max_shell);
                     assert_eq!(

@@ -25,8 +25,8 @@ use crate::raster::{
 use crate::scene::{FinSelectionSetting, MeshKind, Scene, ShellSpacingSetting};
 use crate::simd::SimdLevel;
 use fragment::{
-    FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, LitVaryings, ShadeParams,
-    SurfaceVaryings,
+    BurnState, FragmentStage, FurShader, FurVaryings, LayerMaps, LayerParams, LitVaryings,
+    ShadeParams, SurfaceVaryings,
 };
 use glam::{Vec2, Vec3, Vec4};
 use maps::SurfaceMaps;
@@ -253,6 +253,23 @@ pub struct PreparedScene {
 const BARE_BY_DENSITY: u8 = 1;
 /// A triangle where the length map is 0 all over: every shell above the root is cut there.
 const BARE_BY_LENGTH: u8 = 2;
+
+/// For each triangle of `body`, the cosine its fragments surely reach towards a match given by
+/// direction ([`BurnState::surely_burnt_cosine`] of its vertices' rest normals; −∞ for a
+/// triangle with a vertex out of range): taken once a frame, each shell layer then compares it
+/// with its own bound ([`BurnState::surely_burnt_from`]) instead of normalising the normals
+/// again for every match on every layer.
+fn surely_burnt_cosines(body: &Mesh, burn: &BurnState) -> Vec<f32> {
+    use rayon::prelude::*;
+    let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.rest_normal);
+    body.indices
+        .par_iter()
+        .map(|t| match (normal(t[0]), normal(t[1]), normal(t[2])) {
+            (Some(a), Some(b), Some(c)) => burn.surely_burnt_cosine([a, b, c]),
+            _ => f32::NEG_INFINITY,
+        })
+        .collect()
+}
 
 /// [`PreparedScene::bare`]: for each triangle of `mesh`, whether the density map (and the
 /// length map) read 0 everywhere on it ([`SurfaceMaps::red_is_zero_over`]).
@@ -1172,6 +1189,10 @@ impl PreparedScene {
 
         let difference = s.fur.fur_length();
         let eye = camera.eye;
+        let burn_cosines = shade
+            .burn
+            .as_ref()
+            .map(|burn| surely_burnt_cosines(body, burn));
         for (i, textures) in self.shells.iter().enumerate() {
             if cancelled() {
                 return Err(RenderError::Cancelled);
@@ -1191,7 +1212,7 @@ impl PreparedScene {
             // Triangles whose fur is surely burnt away on this layer, or bare under the maps,
             // are not drawn at all: the image is the same, and fur that is not there costs
             // nothing (thesis table 4.6).
-            let kept = self.drawn_triangles(body, shade, &layer);
+            let kept = self.drawn_triangles(body, burn_cosines.as_deref(), shade, &layer);
             frame.draw_quads(
                 &body.vertices,
                 kept.as_deref().unwrap_or(&body.indices),
@@ -1321,13 +1342,14 @@ impl PreparedScene {
     }
 
     /// The mesh's triangles a shell layer draws: all but those whose fur is surely burnt away
-    /// on the layer and those where the maps leave the skin bare ([`PreparedScene::bare`]: the
-    /// density map 0, on every layer; the length map 0, above the root). `None` when that is
-    /// all of them. The image is the same: every fragment of a triangle left out would be
-    /// discarded.
+    /// on the layer (`burn_cosines`, [`surely_burnt_cosines`] of `body`) and those where the maps
+    /// leave the skin bare ([`PreparedScene::bare`]: the density map 0, on every layer; the
+    /// length map 0, above the root). `None` when that is all of them. The image is the same:
+    /// every fragment of a triangle left out would be discarded.
     fn drawn_triangles(
         &self,
         body: &Mesh,
+        burn_cosines: Option<&[f32]>,
         shade: &ShadeParams,
         layer: &LayerParams,
     ) -> Option<Vec<[u32; 3]>> {
@@ -1340,24 +1362,22 @@ impl PreparedScene {
             std::ptr::eq(body, &self.mesh)
                 || (bare.len() == body.indices.len() && body.indices == self.mesh.indices)
         });
-        let burn = shade.burn.as_ref();
+        let burn = shade.burn.as_ref().zip(burn_cosines);
         if burn.is_none() && bare.is_none() {
             return None;
         }
-        let normal = |i: u32| body.vertices.get(i as usize).map(|v| v.rest_normal);
-        let burnt = |t: &[u32; 3]| {
-            burn.is_some_and(|burn| match (normal(t[0]), normal(t[1]), normal(t[2])) {
-                (Some(a), Some(b), Some(c)) => {
-                    burn.surely_burnt([a, b, c], layer.index, layer.max_shell)
-                }
-                _ => false,
+        let burnt = |k: usize| {
+            burn.is_some_and(|(burn, cosines)| {
+                cosines
+                    .get(k)
+                    .is_some_and(|&c| burn.surely_burnt_from(c, layer.index, layer.max_shell))
             })
         };
         Some(
             body.indices
                 .iter()
                 .enumerate()
-                .filter(|&(k, t)| !(bare.is_some_and(|bare| bare[k] & skipped != 0) || burnt(t)))
+                .filter(|&(k, _)| !(bare.is_some_and(|bare| bare[k] & skipped != 0) || burnt(k)))
                 .map(|(_, t)| *t)
                 .collect(),
         )

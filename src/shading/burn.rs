@@ -2,8 +2,8 @@
 //! intensity decides, per shell, whether the layer is intact, charred, or burnt away, and its
 //! exponent follows a schedule so the burnt area starts small and spreads.
 
+use super::lanes::lane_mask;
 use glam::Vec3;
-use wide::f32x4;
 
 /// Spot intensities strictly above this burn (thesis 3.4: "if the intensity is greater than
 /// 0.1"); 0.1 itself is unburnt.
@@ -73,28 +73,29 @@ pub fn burn_rule(intensity: f32, shell_index: u32, max_shell: u32) -> BurnOutcom
     }
 }
 
-/// [`burn_rule`] of a quad's four lanes as lane masks (bit `l` for lane `l`): which are burnt
-/// away, which charred and by what factor. Lane by lane the same outcome as the scalar rule
-/// ([`QuadBurn::outcome`] reads one lane back).
+/// [`burn_rule`] of `N` lanes as lane masks (bit `l` for lane `l`, `N` at most 32): which are
+/// burnt away, which charred and by what factor. Lane by lane the same outcome as the scalar
+/// rule ([`BurnLanes::outcome`] reads one lane back).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct QuadBurn {
+pub struct BurnLanes<const N: usize> {
     /// Lanes burnt away ([`BurnOutcome::Burnt`]).
     pub burnt: u32,
     /// Lanes charred ([`BurnOutcome::Charred`]); never a burnt lane.
     pub charred: u32,
     /// Each charred lane's factor on the strand colour (meaningless in the other lanes).
-    pub colour_factor: [f32; 4],
+    pub colour_factor: [f32; N],
 }
 
-impl QuadBurn {
-    /// The outcome of lane `lane` (0..4).
+impl<const N: usize> BurnLanes<N> {
+    /// The outcome of lane `lane` (`0..N`; a lane past the last reads the last).
     pub fn outcome(&self, lane: usize) -> BurnOutcome {
-        let bit = 1 << lane.min(3);
+        let lane = lane.min(N.saturating_sub(1));
+        let bit = 1u32.checked_shl(lane as u32).unwrap_or(0);
         if self.burnt & bit != 0 {
             BurnOutcome::Burnt
         } else if self.charred & bit != 0 {
             BurnOutcome::Charred {
-                colour_factor: self.colour_factor[lane.min(3)],
+                colour_factor: self.colour_factor[lane],
             }
         } else {
             BurnOutcome::Unburnt
@@ -102,26 +103,38 @@ impl QuadBurn {
     }
 }
 
-/// [`burn_rule`] of four intensities on one shell, with the same comparisons and roundings
-/// per lane on four-lane vectors (a quad's burn test runs it for every quad of a burning frame).
+/// [`burn_rule`] of `N` intensities (`N` at most 32) on one shell, with the same comparisons
+/// and roundings per lane, as loops over the lanes that the level's copy of the fur stage runs
+/// packed (a batch's entry test runs it on every lane of a burning frame).
 #[inline(always)]
-pub fn burn_rule_x4(intensity: [f32; 4], shell_index: u32, max_shell: u32) -> QuadBurn {
-    let intensity = f32x4::from(intensity);
-    // `I > 0.1`, false for NaN: the lanes the rule touches.
-    let above = intensity.simd_gt(f32x4::splat(BURN_THRESHOLD));
-    // `min(I, 1)` where `I` is a number above the threshold.
-    let i = intensity.simd_lt(f32x4::ONE).select(intensity, f32x4::ONE);
-    let factor = f32x4::ONE - i;
-    let t = factor * f32x4::splat(max_shell as f32);
+#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+pub fn burn_rule_lanes<const N: usize>(
+    intensity: [f32; N],
+    shell_index: u32,
+    max_shell: u32,
+) -> BurnLanes<N> {
+    let (max_shell_f, shell_f) = (max_shell as f32, shell_index as f32);
+    let (mut above, mut below_shell) = (0u32, 0u32);
+    let mut colour_factor = [0.0f32; N];
+    for k in 0..N {
+        let intensity = intensity[k];
+        // `min(I, 1)` where `I` is a number above the threshold.
+        let i = if intensity < 1.0 { intensity } else { 1.0 };
+        let factor = 1.0 - i;
+        colour_factor[k] = factor;
+        // `I > 0.1`, false for NaN: the lanes the rule touches.
+        above |= lane_mask(intensity > BURN_THRESHOLD) & (1 << k);
+        below_shell |= lane_mask(factor * max_shell_f < shell_f) & (1 << k);
+    }
     let burnt = if shell_index > 0 {
-        above.to_bitmask() & t.simd_lt(f32x4::splat(shell_index as f32)).to_bitmask()
+        above & below_shell
     } else {
         0
     };
-    QuadBurn {
+    BurnLanes {
         burnt,
-        charred: above.to_bitmask() & !burnt,
-        colour_factor: factor.to_array(),
+        charred: above & !burnt,
+        colour_factor,
     }
 }
 
@@ -189,7 +202,7 @@ mod tests {
     use crate::shading::test_support::{Lcg, assert_close};
 
     #[test]
-    fn the_four_lane_rule_is_the_scalar_rule_lane_by_lane() {
+    fn the_rule_on_lanes_is_the_scalar_rule_lane_by_lane() {
         let mut rng = Lcg::new(71);
         let mut intensities = vec![
             f32::NAN,
@@ -216,14 +229,20 @@ mod tests {
         intensities.extend((0..400).map(|_| rng.range(-0.2, 1.2)));
         for max_shell in [0u32, 1, 29, 99] {
             for shell in 0..=max_shell {
-                for chunk in intensities.chunks(4) {
-                    let mut lanes = [0.0f32; 4];
+                for chunk in intensities.chunks(16) {
+                    let mut lanes = [0.0f32; 16];
                     lanes[..chunk.len()].copy_from_slice(chunk);
-                    let quad = burn_rule_x4(lanes, shell, max_shell);
-                    assert_eq!(quad.burnt & quad.charred, 0);
+                    let wide = burn_rule_lanes(lanes, shell, max_shell);
+                    assert_eq!(wide.burnt & wide.charred, 0);
+                    let mut quad = [0.0f32; 4];
+                    quad.copy_from_slice(&lanes[..4]);
+                    let narrow = burn_rule_lanes(quad, shell, max_shell);
                     for (i, &intensity) in lanes.iter().enumerate() {
                         let want = burn_rule(intensity, shell, max_shell);
-                        let got = quad.outcome(i);
+                        let got = wide.outcome(i);
+                        if i < 4 {
+                            assert_eq!(narrow.outcome(i), got, "{intensity} on {shell}");
+                        }
                         match (got, want) {
                             (
                                 BurnOutcome::Charred { colour_factor: a },

@@ -100,8 +100,8 @@ pub mod tangent_space;
 pub mod wind;
 
 pub use burn::{
-    BURN_THRESHOLD, BurnOutcome, BurnSchedule, QuadBurn, burn_exponent, burn_rule, burn_rule_x4,
-    burnt_away_above,
+    BURN_THRESHOLD, BurnLanes, BurnOutcome, BurnSchedule, burn_exponent, burn_rule,
+    burn_rule_lanes, burnt_away_above,
 };
 pub use kajiya_kay::{
     BANKS_EXPONENT, LightingExponents, SpecularLobes, SpecularTangents, StrandLighting,
@@ -136,8 +136,8 @@ pub use spots::{
     apply_spot, apply_spot_lanes, apply_spots, ellipsoid_spot_intensity,
     ellipsoid_spot_intensity_lanes, light_spot_cosine, light_spot_cosine_above,
     light_spot_cosine_below, light_spot_intensity, light_spot_lobe, light_spot_lobe_lanes,
-    light_spot_lobe_x4, light_stripe_band, light_stripe_intensity, point_light_cosine,
-    point_light_intensity, reach_falloff, spot_gradient, spot_gradient_lanes, stripe_intensity,
+    light_stripe_band, light_stripe_intensity, point_light_cosine, point_light_intensity,
+    reach_falloff, spot_gradient, spot_gradient_lanes, stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

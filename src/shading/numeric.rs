@@ -3,7 +3,7 @@
 //! a NaN into the framebuffer.
 
 use super::lanes::{lane_mask, select_bits};
-use wide::{f32x4, i32x4};
+use wide::f32x4;
 
 /// Clamps to `[0, 1]`; NaN becomes 0.
 #[inline]
@@ -87,55 +87,6 @@ pub(crate) fn pow01_lanes<const N: usize>(base: [f32; N], exponent: [f32; N]) ->
         out[i] = exp2_of_product_lane(x[i], l[i], y[i]);
     }
     out
-}
-
-/// [`pow01`] of four bases by one exponent, each lane bit-identical to
-/// `pow01(base[i], exponent)`: the steps of [`log2_lane`] and [`exp2_of_product_lane`] written
-/// on four-lane vectors, so that they run packed at every level. (LLVM left the four-lane loops
-/// of [`pow01_lanes`] scalar where a quad's burn test takes its power, once per quad.)
-#[inline(always)]
-pub(crate) fn pow01_x4(base: f32x4, exponent: f32) -> f32x4 {
-    let x = saturate_x4(base);
-    let y = sanitize_exponent(exponent);
-    // log2_lane
-    let subnormal = x.simd_lt(f32x4::splat(f32::MIN_POSITIVE));
-    let xs = subnormal.select(x * f32x4::splat(TWO_POW_23), x);
-    let bias = subnormal.select(f32x4::splat(-23.0), f32x4::ZERO);
-    let bits: i32x4 = bytemuck::cast(xs);
-    let k = (bits - i32x4::splat(SQRT_HALF_BITS)) >> 23u32;
-    let m: f32x4 = bytemuck::cast(bits - (k << 23u32));
-    let e = k.round_float() + bias;
-    let s = (m - f32x4::ONE) / (m + f32x4::ONE);
-    let z = s * s;
-    let q = f32x4::splat(LOG2_Q[0]) + z * (f32x4::splat(LOG2_Q[1]) + z * f32x4::splat(LOG2_Q[2]));
-    let l = e + (f32x4::splat(LOG2_C) * s + (s * z) * q);
-    // exp2_of_product_lane
-    let t = f32x4::splat(y) * l;
-    let lowest = f32x4::splat(EXP2_LOWEST);
-    let clamped = t.simd_gt(lowest).select(t, lowest);
-    let magic = f32x4::splat(ROUND_MAGIC);
-    let shifted = clamped + magic;
-    let n = shifted - magic;
-    let whole =
-        bytemuck::cast::<f32x4, i32x4>(shifted) - i32x4::splat(ROUND_MAGIC.to_bits() as i32);
-    let f = clamped - n;
-    let mut p = f32x4::splat(EXP2_P[5]);
-    for &c in EXP2_P[..5].iter().rev() {
-        p = f32x4::splat(c) + f * p;
-    }
-    let fraction = f32x4::ONE + f * p;
-    let small = whole.simd_lt(i32x4::splat(-125));
-    let whole = whole + (small & i32x4::splat(64));
-    let scale =
-        bytemuck::cast::<i32x4, f32x4>(small).select(f32x4::splat(TWO_POW_MINUS_64), f32x4::ONE);
-    let scaled: f32x4 = bytemuck::cast(bytemuck::cast::<f32x4, i32x4>(fraction) + (whole << 23u32));
-    let out = scaled * scale;
-    let out = t
-        .simd_ge(f32x4::splat(UNDERFLOW_BELOW))
-        .select(out, f32x4::ZERO);
-    let out = x.simd_eq(f32x4::ZERO).select(f32x4::ZERO, out);
-    let out = x.simd_eq(f32x4::ONE).select(f32x4::ONE, out);
-    if y == 0.0 { f32x4::ONE } else { out }
 }
 
 /// The powers of `N` fragments' strand lighting with one tangent, in three batches of `N`
@@ -443,31 +394,6 @@ mod tests {
         1.0e30,
         f32::MAX,
     ];
-
-    #[test]
-    fn pow01_x4_is_bit_identical_to_pow01() {
-        let bases = pow_bases();
-        for &exponent in POW_EXPONENTS
-            .iter()
-            .chain(&[0.0, -1.0, f32::NAN, f32::INFINITY])
-        {
-            for chunk in bases.chunks(4) {
-                let mut base = [0.5f32; 4];
-                base[..chunk.len()].copy_from_slice(chunk);
-                let got = pow01_x4(f32x4::from(base), exponent).to_array();
-                for i in 0..4 {
-                    let want = pow01(base[i], exponent);
-                    assert_eq!(
-                        got[i].to_bits(),
-                        want.to_bits(),
-                        "pow01({}, {exponent}) = {want}, x4 gave {}",
-                        base[i],
-                        got[i]
-                    );
-                }
-            }
-        }
-    }
 
     #[test]
     fn pow01_lanes_are_bit_identical_to_pow01() {

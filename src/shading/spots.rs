@@ -8,7 +8,7 @@
 
 use super::lanes::Vec3xN;
 use super::numeric::{
-    finite_or_zero, pow01, pow01_lanes, pow01_x4, ramp, ramp_lanes, saturate, saturate_select,
+    finite_or_zero, pow01, pow01_lanes, ramp, ramp_lanes, saturate, saturate_select,
 };
 use glam::Vec3;
 
@@ -58,12 +58,6 @@ pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
 #[inline(always)]
 pub fn light_spot_lobe_lanes<const N: usize>(cosine: [f32; N], exponent: f32) -> [f32; N] {
     pow01_lanes(cosine, [exponent; N])
-}
-
-/// [`light_spot_lobe`] of four cosines, lane by lane the same bits, packed at every level.
-#[inline(always)]
-pub fn light_spot_lobe_x4(cosine: [f32; 4], exponent: f32) -> [f32; 4] {
-    pow01_x4(wide::f32x4::from(cosine), exponent).to_array()
 }
 
 /// [`spot_gradient`] of `N` intensities, lane by lane the same bits.
