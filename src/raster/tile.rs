@@ -263,6 +263,13 @@ impl QuadSlots {
         })
     }
 
+    /// Closes the lanes outside `mask` (bit k for lane k): their slots are never taken, so
+    /// those lanes are discarded.
+    #[inline(always)]
+    pub fn keep_lanes(&mut self, mask: u32) {
+        self.open &= mask;
+    }
+
     /// The slots of all four lanes, when all four are open (the common quad, inside its
     /// triangle): [`QuadSlots::take`] of lanes 0 to 3 in one step. `None`, taking nothing,
     /// when any lane is not open.
@@ -798,6 +805,14 @@ mod tests {
         let mut partial = quad(0b1011);
         assert!(partial.take_whole().is_none());
         assert_eq!(partial.lanes(), 0b1011);
+        // Lanes closed by mask are never taken; the others keep their slots.
+        let mut kept = quad(0b1011);
+        kept.keep_lanes(!0b0010);
+        assert_eq!(kept.lanes(), 0b1001);
+        assert!(kept.take(1).is_none());
+        assert!(kept.take(2).is_none());
+        let slot = kept.take(3).expect("lane 3 kept");
+        assert_eq!((slot.index, slot.depth), (130 + 64 + 1, 1.0));
     }
 
     /// The span is exactly the quads no edge rejects, for random edges of every sign.

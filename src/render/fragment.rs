@@ -926,8 +926,9 @@ fn same_triangle(a: &[usize; 3], b: &[usize; 3]) -> bool {
 /// picks are found here, once; its shaded lanes (their slots and interpolation weights) then
 /// join `batch`, which runs the whole stage on `N` lanes at a time ([`FurBatch`]).
 /// Lanes of quads at other mip levels or of another triangle go to a fresh batch: the one held
-/// is run first. Where step 1 has something to test (a burn, a length map), the lanes join
-/// untested and the batch tests them together as it fills ([`FurBatch::enter`]).
+/// is run first. Where step 1 has something to test (a burn, a length map), the quad is held
+/// untested instead, and the quads held are tested together, a batch's worth at a time,
+/// before they join.
 ///
 /// `#[inline(always)]`: it is the hot path, compiled into each [`crate::simd`] level's copy of
 /// the rasterizer's tile replay.
@@ -935,7 +936,7 @@ fn same_triangle(a: &[usize; 3], b: &[usize; 3]) -> bool {
 #[allow(clippy::too_many_arguments)] // the quad, where its lanes go, and the layer's state
 pub fn shade_fur_quad<'a, const N: usize>(
     quad: &Quad<'_, FurVaryings>,
-    mut slots: QuadSlots,
+    slots: QuadSlots,
     batch: &mut FurBatch<'a, N>,
     textures: LayerMaps<'a>,
     maps: &SurfaceMaps,
@@ -946,44 +947,117 @@ pub fn shade_fur_quad<'a, const N: usize>(
     if slots.lanes() == 0 {
         return;
     }
+    // The triangle, known by its corners' addresses: they stay in place and unchanged while
+    // the batch lives (one per tile and draw, [`QuadShader::Deferred`]).
+    let triangle = quad.corners().map(|c| std::ptr::from_ref(c) as usize);
+    if entry_test_needed(&textures, maps, p) {
+        batch.hold(quad, slots, triangle, textures, maps, layer, p, &mut write);
+        return;
+    }
+    let untouched = QuadEntry {
+        charred: 0,
+        char_factor: [1.0; 4],
+    };
+    join_quad(
+        quad, slots, &untouched, triangle, batch, textures, maps, layer, p, &mut write,
+    );
+}
+
+/// What step 1 of the fur stage found for a quad's lanes as they join a batch.
+struct QuadEntry {
+    /// Bit l: lane l is charred.
+    charred: u32,
+    /// Lane l's factor on the strand colour where charred.
+    char_factor: [f32; 4],
+}
+
+/// A quad's lanes (`slots`, those step 1 kept) joining `batch`: [`shade_fur_quad`]'s level of
+/// detail and batch keeping, for a quad of `triangle` (its corners' addresses).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // the quad, where its lanes go, and the layer's state
+fn join_quad<'a, const N: usize>(
+    quad: &Quad<'_, FurVaryings>,
+    slots: QuadSlots,
+    entry: &QuadEntry,
+    triangle: [usize; 3],
+    batch: &mut FurBatch<'a, N>,
+    textures: LayerMaps<'a>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+    write: &mut impl FnMut(PixelSlot, Vec4),
+) {
     // The level of detail reads the uv of lanes 0–2 (helper lanes too).
     let uv = |lane: usize| quad.field(lane, |v| &v.surface.uv);
-    let origin = uv(0);
-    let (ddx, ddy) = (
-        Vec2::difference(&uv(1), &origin),
-        Vec2::difference(&uv(2), &origin),
+    let footprint = quad_footprint(uv(0), uv(1), uv(2), &textures);
+    let corners = || quad.corners().map(|c| *bytemuck::cast_ref(c));
+    join_lanes(
+        slots,
+        quad.weights(),
+        footprint,
+        entry,
+        (triangle, corners),
+        batch,
+        textures,
+        maps,
+        layer,
+        p,
+        write,
     );
+}
+
+/// The squared footprint ([`footprint_squared`]) of a quad whose lanes 0, 1 and 2 have these
+/// texture coordinates, on the layer's colour map.
+#[inline(always)]
+fn quad_footprint(origin: Vec2, right: Vec2, below: Vec2, textures: &LayerMaps<'_>) -> f32 {
+    let (ddx, ddy) = (
+        Vec2::difference(&right, &origin),
+        Vec2::difference(&below, &origin),
+    );
+    footprint_squared(ddx, ddy, textures.colour.width(), textures.colour.height())
+}
+
+/// A quad's lanes (`slots`, those step 1 kept; `weights` of its four lanes, its squared
+/// `footprint`) joining `batch`: the mip levels the footprint picks, the batch run first
+/// where it holds lanes of other levels or another triangle or has no room. The triangle is
+/// known by its corners' addresses (`triangle.0`); `triangle.1` copies its corners' varyings
+/// where the batch takes a new triangle.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // the lanes, where they go, and the layer's state
+fn join_lanes<'a, const N: usize>(
+    mut slots: QuadSlots,
+    weights: &[[f32; 4]; 3],
+    footprint: f32,
+    entry: &QuadEntry,
+    (triangle, corners): ([usize; 3], impl FnOnce() -> [[f32; FUR_VARYING_FLOATS]; 3]),
+    batch: &mut FurBatch<'a, N>,
+    textures: LayerMaps<'a>,
+    maps: &SurfaceMaps,
+    layer: &LayerParams,
+    p: &ShadeParams,
+    write: &mut impl FnMut(PixelSlot, Vec4),
+) {
     // The footprint alone chooses the levels the lanes read; the level of detail itself
     // (`½·log2 ρ²`, a chain of dependent operations) is computed in the batch, all its lanes
     // at once.
-    let footprint = footprint_squared(ddx, ddy, textures.colour.width(), textures.colour.height());
     let (lower, shadow_index) = textures.colour.levels_of_footprint(footprint);
     let shadow_level = &textures.colour.levels()[shadow_index];
     // The lanes of a batch read one pair of mip levels and one shadow level: a quad at others
     // runs what the batch holds first. (One call site of the batch's run per copy of the hot
     // path keeps that copy small.)
     let lanes = slots.lanes();
-    let count = lanes.count_ones() as usize;
-    // Untested lanes that fill the batch are tested first: the room the lanes dropped leave
-    // is filled before the batch runs.
-    if batch.len + count > N && batch.tested < batch.len && entry_test_needed(&textures, maps, p) {
-        batch.enter(textures, maps, layer, p);
-    }
-    let full = batch.len + count > N;
-    // The triangle, known by its corners' addresses: they stay in place and unchanged while
-    // the batch lives (one per tile and draw, [`QuadShader::Deferred`]).
-    let triangle = quad.corners().map(|c| std::ptr::from_ref(c) as usize);
+    let full = batch.len + lanes.count_ones() as usize > N;
     if batch.len != 0
         && (full
             || !batch.reads(lower, shadow_level)
             || !same_triangle(&batch.varyings.triangle, &triangle))
     {
-        batch.run(textures, maps, layer, p, &mut write);
+        batch.run(textures, maps, layer, p, write);
     }
     if batch.len == 0 {
         if !same_triangle(&batch.varyings.triangle, &triangle) {
             batch.varyings.triangle = triangle;
-            batch.varyings.corners = quad.corners().map(|c| *bytemuck::cast_ref(c));
+            batch.varyings.corners = corners();
         }
         batch.shadow_level = Some(shadow_level);
         batch.shadow_index = shadow_index;
@@ -1010,10 +1084,12 @@ pub fn shade_fur_quad<'a, const N: usize>(
         for (slot, taken) in batch.slots[at.clone()].iter_mut().zip(whole) {
             *slot = Some(taken);
         }
-        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
+        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(weights) {
             lanes[at.clone()].copy_from_slice(quad_lanes);
         }
-        batch.footprint[at].fill(footprint);
+        batch.footprint[at.clone()].fill(footprint);
+        batch.char_factor[at].copy_from_slice(&entry.char_factor);
+        batch.charred |= entry.charred << i;
         batch.len += 4;
         return;
     }
@@ -1026,17 +1102,19 @@ pub fn shade_fur_quad<'a, const N: usize>(
         };
         let i = batch.len;
         batch.slots[i] = Some(slot);
-        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(quad.weights()) {
+        for (lanes, quad_lanes) in batch.varyings.weights.iter_mut().zip(weights) {
             lanes[i] = quad_lanes[lane];
         }
         batch.footprint[i] = footprint;
+        batch.char_factor[i] = entry.char_factor[lane];
+        batch.charred |= ((entry.charred >> lane) & 1) << i;
         batch.len += 1;
     }
 }
 
 /// Whether step 1 of the fur stage has anything to test in this draw: a burn, or a length map
-/// that cuts shells. Where it has, the lanes of a [`FurBatch`] are tested as it fills
-/// ([`FurBatch::enter`]).
+/// that cuts shells. Where it has, quads are held and tested together before they join a
+/// [`FurBatch`] ([`FurBatch::hold`]).
 #[inline(always)]
 fn entry_test_needed(textures: &LayerMaps<'_>, maps: &SurfaceMaps, p: &ShadeParams) -> bool {
     p.burn.is_some() || (textures.shell && maps.length.is_some())
@@ -1054,18 +1132,19 @@ pub const BATCH_LANES: usize = crate::simd::LANES;
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
 /// in one triangle, whose varyings it interpolates a component of all lanes at a time
 /// (`BatchVaryings`), and read one pair of mip levels and one shadow level (each keeps its
-/// own blend fraction); what is rare (the burn, the painted length, density and colour maps,
-/// differently shaped maps, the debug views) runs lane by lane inside the batch with the
-/// scalar terms.
+/// own blend fraction); what is rare (density and colour maps, differently shaped maps, the
+/// debug views) runs lane by lane inside the batch with the scalar terms. Step 1 (the burn,
+/// the painted length) runs before lanes join: where a draw has it, quads are held and tested
+/// a batch's worth at a time, on all their lanes at once, and only the lanes kept join.
 ///
 /// Lane by lane the same bits as [`shade_fur`]: every step is the scalar twin's operations on
-/// each lane, and a lane's result depends on nothing else in the batch. Lanes discarded on the
-/// way run on with the others, their results dropped: the batch runs full without compaction.
+/// each lane, and a lane's result depends on nothing else in the batch. Lanes discarded after
+/// they join run on with the others, their results dropped: the batch runs full without
+/// compaction.
 pub struct FurBatch<'a, const N: usize> {
     len: usize,
-    /// Lanes `0..tested` passed step 1 ([`FurBatch::enter`]); the lanes after joined since.
-    /// Only read in draws where step 1 tests something ([`entry_test_needed`]).
-    tested: usize,
+    /// Quads held for step 1 before they join (draws where it tests something).
+    pending: PendingQuads<N>,
     /// The lower mip level index of `pair` (`None` before the first quad).
     pair_lower: Option<usize>,
     /// The mip levels the texture reads of the lanes held read (`None`: the colour and
@@ -1081,10 +1160,93 @@ pub struct FurBatch<'a, const N: usize> {
     /// Each lane's squared footprint (its quad's, [`footprint_squared`]), from which the batch
     /// computes the lanes' levels of detail.
     footprint: [f32; N],
-    /// Bit i: lane i is charred by the burn (found by [`FurBatch::enter`]).
+    /// Bit i: lane i is charred by the burn (found by step 1 before its quad joined).
     charred: u32,
     /// Each charred lane's factor on the strand colour.
     char_factor: [f32; N],
+}
+
+/// Quads of one triangle held for step 1 of the fur stage ([`FurBatch::hold`]): up to `N/4`
+/// (four at most), quad `q`'s lane `l` at lane `4q + l` of `varyings`.
+struct PendingQuads<const N: usize> {
+    count: usize,
+    varyings: BatchVaryings<N>,
+    slots: [Option<QuadSlots>; 4],
+}
+
+impl<const N: usize> Default for PendingQuads<N> {
+    /// None held.
+    fn default() -> Self {
+        PendingQuads {
+            count: 0,
+            varyings: BatchVaryings::default(),
+            slots: [const { None }; 4],
+        }
+    }
+}
+
+/// What step 1 found for the quads held: bit `i` for lane `i` as [`PendingQuads`] lays them out.
+struct HeldOutcome<const N: usize> {
+    /// Lanes burnt away or above the painted length.
+    dropped: u32,
+    /// Lanes charred.
+    charred: u32,
+    /// Each charred lane's factor on the strand colour.
+    char_factor: [f32; N],
+}
+
+impl<const N: usize> PendingQuads<N> {
+    /// [`FurBatch::test_held`]'s work: the burn's outcome of all `N` lanes at once (lanes of
+    /// no quad held, or not shaded, too; their results are dropped), and the painted length
+    /// lane by lane.
+    #[inline(always)]
+    fn test(
+        &self,
+        length_map: Option<&Texture>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+    ) -> HeldOutcome<N> {
+        let mut live = 0u32;
+        for (q, slots) in self.slots.iter().enumerate().take(self.count) {
+            live |= slots.as_ref().map_or(0, |s| s.lanes()) << (4 * q);
+        }
+        let mut outcome = HeldOutcome {
+            dropped: 0,
+            charred: 0,
+            char_factor: [1.0; N],
+        };
+        if let Some(burn) = &p.burn {
+            // Object positions only where a match stands at a point: matches by direction read
+            // the normal alone.
+            let unit_normals = self.varyings.vec3(NORMAL).normalize_or_zero();
+            let objects = if burn.points.is_empty() {
+                Vec3xN::default()
+            } else {
+                self.varyings.vec3(OBJECT)
+            };
+            let lanes =
+                burn.lanes_outcome(&unit_normals, &objects, live, layer.index, layer.max_shell);
+            outcome.dropped = lanes.burnt & live;
+            outcome.charred = lanes.charred & live;
+            outcome.char_factor = lanes.colour_factor;
+        }
+        if let Some(length_map) = length_map {
+            let (length, [u, v]) = (self.varyings.component(LENGTH), self.varyings.vec2(MESH_UV));
+            for i in 0..N {
+                if (live & !outcome.dropped) & (1 << i) != 0
+                    && !shading::layer_within_length(
+                        layer.height_fraction,
+                        length[i],
+                        maps.sample(length_map, Vec2::new(u[i], v[i])).x,
+                    )
+                {
+                    outcome.dropped |= 1 << i;
+                }
+            }
+        }
+        outcome
+    }
 }
 
 impl<const N: usize> Default for FurBatch<'_, N> {
@@ -1092,7 +1254,7 @@ impl<const N: usize> Default for FurBatch<'_, N> {
     fn default() -> Self {
         FurBatch {
             len: 0,
-            tested: 0,
+            pending: PendingQuads::default(),
             pair_lower: None,
             pair: None,
             shadow_level: None,
@@ -1175,114 +1337,149 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                 .is_some_and(|held| std::ptr::eq(held, level))
     }
 
-    /// Step 1 of the fur stage (the scalar twin's first, before any texture read) for the lanes
-    /// that joined since the last test: lanes burnt away on this layer, and shell lanes above
-    /// the painted length, are dropped (their slots never written) and the lanes kept close up
-    /// in their order, so that a burnt or bare region costs this test alone and batches run
-    /// full of lanes the image shows; charred lanes are marked.
+    /// Holds a quad for step 1 of the fur stage (the scalar twin's first, before any texture
+    /// read) instead of joining it: quads are tested a batch's worth at a time
+    /// ([`FurBatch::test_held`]), and then join as [`shade_fur_quad`] joins them, less their
+    /// lanes burnt away on this layer or above the painted length, so that a burnt or bare region
+    /// costs this test alone and the batches that run are full of lanes the image shows. The
+    /// quads held are of one triangle: a quad of another has them tested and joined first.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // the quad, where its lanes go, and the layer's state
+    fn hold(
+        &mut self,
+        quad: &Quad<'_, FurVaryings>,
+        slots: QuadSlots,
+        triangle: [usize; 3],
+        textures: LayerMaps<'a>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+        write: &mut impl FnMut(PixelSlot, Vec4),
+    ) {
+        // Whole quads of a batch's worth, at most four of them.
+        const { assert!(N >= 4 && N.is_multiple_of(4) && N / 4 <= 4) };
+        if self.pending.count != 0 && !same_triangle(&self.pending.varyings.triangle, &triangle) {
+            self.join_held(textures, maps, layer, p, write);
+        }
+        if self.pending.count == 0 && !same_triangle(&self.pending.varyings.triangle, &triangle) {
+            self.pending.varyings.triangle = triangle;
+            self.pending.varyings.corners = quad.corners().map(|c| *bytemuck::cast_ref(c));
+        }
+        let q = self.pending.count;
+        let at = 4 * q..4 * q + 4;
+        for (lanes, quad_lanes) in self.pending.varyings.weights.iter_mut().zip(quad.weights()) {
+            lanes[at.clone()].copy_from_slice(quad_lanes);
+        }
+        self.pending.slots[q] = Some(slots);
+        self.pending.count += 1;
+        if 4 * self.pending.count == N {
+            self.join_held(textures, maps, layer, p, write);
+        }
+    }
+
+    /// Tests the quads held ([`FurBatch::hold`]) and joins what they keep, in their order.
+    #[inline(never)]
+    fn join_held(
+        &mut self,
+        textures: LayerMaps<'a>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+        write: &mut impl FnMut(PixelSlot, Vec4),
+    ) {
+        let count = self.pending.count;
+        if count == 0 {
+            return;
+        }
+        let tested = self.test_held(textures, maps, layer, p);
+        self.pending.count = 0;
+        // The quads join from copies of their corners and weights (the batch they join is
+        // `self`), their triangle still known by the draw's corner addresses. Their levels of
+        // detail read the uv of each quad's lanes 0–2, interpolated for all lanes at once.
+        let corners = self.pending.varyings.corners;
+        let triangle = self.pending.varyings.triangle;
+        let [u, v] = self.pending.varyings.vec2(UV);
+        let lanes = |q: usize| std::array::from_fn(|l| Vec2::new(u[4 * q + l], v[4 * q + l]));
+        for q in 0..count.min(N / 4) {
+            let Some(mut slots) = self.pending.slots[q].take() else {
+                continue;
+            };
+            slots.keep_lanes(!(tested.dropped >> (4 * q)));
+            if slots.lanes() == 0 {
+                continue;
+            }
+            let at = 4 * q..4 * q + 4;
+            let weights: [[f32; 4]; 3] = std::array::from_fn(|k| {
+                let mut row = [0.0f32; 4];
+                row.copy_from_slice(&self.pending.varyings.weights[k][at.clone()]);
+                row
+            });
+            let mut char_factor = [1.0f32; 4];
+            char_factor.copy_from_slice(&tested.char_factor[at]);
+            let entry = QuadEntry {
+                charred: (tested.charred >> (4 * q)) & 0b1111,
+                char_factor,
+            };
+            let [origin, right, below, _]: [Vec2; 4] = lanes(q);
+            let footprint = quad_footprint(origin, right, below, &textures);
+            join_lanes(
+                slots,
+                &weights,
+                footprint,
+                &entry,
+                (triangle, || corners),
+                self,
+                textures,
+                maps,
+                layer,
+                p,
+                write,
+            );
+        }
+    }
+
+    /// Step 1 of the quads held: which lanes it drops (burnt away, above the painted length)
+    /// and which it chars, by what factor.
     ///
     /// Runs out of line, compiled for the frame's SIMD level ([`ShadeParams::simd`], through
     /// [`crate::simd::dispatch_level`]), so that frames without a burn or length map do not
     /// carry its code in the hot path, and on all `N` lanes at once: a quad at a time, the
     /// test's chain of dependent operations (normalisation, cosines, power, rule) ran four
-    /// lanes wide once per quad, a quarter of a burning frame.
+    /// lanes wide once a quad, a quarter of a burning frame.
     #[inline(never)]
-    fn enter(
-        &mut self,
+    fn test_held(
+        &self,
         textures: LayerMaps<'_>,
         maps: &SurfaceMaps,
         layer: &LayerParams,
         p: &ShadeParams,
-    ) {
-        struct Entry<'q, 'a, 'b, const N: usize> {
-            batch: &'q mut FurBatch<'b, N>,
+    ) -> HeldOutcome<N> {
+        struct Entry<'q, 'a, const N: usize> {
+            pending: &'q PendingQuads<N>,
             length_map: Option<&'a Texture>,
             maps: &'a SurfaceMaps,
             layer: &'a LayerParams,
             p: &'a ShadeParams,
         }
-        impl<const N: usize> crate::simd::LevelKernel for Entry<'_, '_, '_, N> {
-            type Output = ();
+        impl<const N: usize> crate::simd::LevelKernel for Entry<'_, '_, N> {
+            type Output = HeldOutcome<N>;
             #[inline(always)]
-            fn run(self) {
-                self.batch
-                    .enter_lanes(self.length_map, self.maps, self.layer, self.p);
+            fn run(self) -> HeldOutcome<N> {
+                self.pending
+                    .test(self.length_map, self.maps, self.layer, self.p)
             }
         }
         let length_map = maps.length.as_ref().filter(|_| textures.shell);
         crate::simd::dispatch_level(
             p.simd,
             Entry {
-                batch: self,
+                pending: &self.pending,
                 length_map,
                 maps,
                 layer,
                 p,
             },
-        );
-    }
-
-    /// [`FurBatch::enter`]'s work.
-    #[inline(always)]
-    fn enter_lanes(
-        &mut self,
-        length_map: Option<&Texture>,
-        maps: &SurfaceMaps,
-        layer: &LayerParams,
-        p: &ShadeParams,
-    ) {
-        let (from, len) = (self.tested, self.len);
-        let below = |lanes: usize| 1u32.checked_shl(lanes as u32).map_or(u32::MAX, |b| b - 1);
-        let untested = below(len) & !below(from);
-        let (mut burnt, mut charred, mut char_factor) = (0u32, 0u32, [1.0f32; N]);
-        if let Some(burn) = &p.burn {
-            // The normals of all lanes at once (lanes not tested here too; their results are
-            // dropped); object positions only where a match stands at a point.
-            let unit_normals = self.varyings.vec3(NORMAL).normalize_or_zero();
-            let objects = if burn.points.is_empty() {
-                Vec3xN::default()
-            } else {
-                self.varyings.vec3(OBJECT)
-            };
-            let outcome = burn.lanes_outcome(
-                &unit_normals,
-                &objects,
-                untested,
-                layer.index,
-                layer.max_shell,
-            );
-            (burnt, charred, char_factor) = (outcome.burnt, outcome.charred, outcome.colour_factor);
-        }
-        let lengths =
-            length_map.map(|_| (self.varyings.component(LENGTH), self.varyings.vec2(MESH_UV)));
-        self.charred &= below(from);
-        let mut kept = from;
-        for i in from..len {
-            let mut shown = burnt & (1 << i) == 0;
-            if shown && let (Some(length_map), Some((length, [u, v]))) = (length_map, &lengths) {
-                shown = shading::layer_within_length(
-                    layer.height_fraction,
-                    length[i],
-                    maps.sample(length_map, Vec2::new(u[i], v[i])).x,
-                );
-            }
-            if !shown {
-                // Dropped: its slot is never written.
-                self.slots[i] = None;
-                continue;
-            }
-            if kept != i {
-                self.slots[kept] = self.slots[i].take();
-                for weights in &mut self.varyings.weights {
-                    weights[kept] = weights[i];
-                }
-                self.footprint[kept] = self.footprint[i];
-            }
-            self.char_factor[kept] = char_factor[i];
-            self.charred |= ((charred >> i) & 1) << kept;
-            kept += 1;
-        }
-        (self.len, self.tested) = (kept, kept);
+        )
     }
 
     /// The whole fur stage of the lanes held, each colour written to its lane's slot (a
@@ -1302,9 +1499,6 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
-        if self.tested < self.len && entry_test_needed(&textures, maps, p) {
-            self.enter(textures, maps, layer, p);
-        }
         if self.len == 0 {
             return;
         }
@@ -1330,7 +1524,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
     ) -> BatchColours<N> {
         let len = self.len;
-        (self.len, self.tested) = (0, 0);
+        self.len = 0;
         // Lanes still alive: bit i for lane i.
         let alive = (1u32 << len) - 1;
         let varyings = &self.varyings;
@@ -1357,7 +1551,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             let f = clamped - lower;
             frac[i] = if f != 0.0 && blends { f } else { 0.0 };
         }
-        // Step 1 ran as the batch filled (`FurBatch::enter`): the lanes held are not burnt away nor
+        // Step 1 ran before the lanes joined (`FurBatch::hold`): the lanes held are not burnt away nor
         // above the painted length; the charred ones are marked.
         let (charred, char_factor) = (self.charred, self.char_factor);
         self.charred = 0;
@@ -1683,6 +1877,13 @@ impl<'a> QuadShader<FurVaryings> for FurShader<'a> {
         batch: &mut FurBatch<'a, N>,
         mut write: impl FnMut(PixelSlot, Vec4),
     ) {
+        batch.join_held(
+            self.textures,
+            self.maps,
+            &self.layer,
+            self.params,
+            &mut write,
+        );
         batch.run(
             self.textures,
             self.maps,
@@ -2142,7 +2343,11 @@ mod tests {
                     let n = if bound <= 1.0 && i < 12 {
                         let mut c = bound;
                         for _ in 0..rng.range(0.0, 6.0) as usize {
-                            c = if i % 3 == 0 { c.next_down() } else { c.next_up() };
+                            c = if i % 3 == 0 {
+                                c.next_down()
+                            } else {
+                                c.next_up()
+                            };
                         }
                         let c = c.min(1.0);
                         (m * c + side * (1.0 - c * c).max(0.0).sqrt()).normalize_or_zero()
