@@ -1019,9 +1019,9 @@ fn quad_footprint(origin: Vec2, right: Vec2, below: Vec2, textures: &LayerMaps<'
 
 /// A quad's lanes (`slots`, those step 1 kept; `weights` of its four lanes, its squared
 /// `footprint`) joining `batch`: the mip levels the footprint picks, the batch run first
-/// where it holds lanes of other levels or another triangle or has no room. The triangle is
-/// known by its corners' addresses (`triangle.0`); `triangle.1` copies its corners' varyings
-/// where the batch takes a new triangle.
+/// where it holds lanes of other levels or another triangle or has no room. The quad's
+/// triangle comes as its corners' addresses (how the batch knows it) and a function that
+/// copies its corners' varyings, called only where the batch takes a new triangle.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)] // the lanes, where they go, and the layer's state
 fn join_lanes<'a, const N: usize>(
@@ -1378,6 +1378,10 @@ impl<'a, const N: usize> FurBatch<'a, N> {
     }
 
     /// Tests the quads held ([`FurBatch::hold`]) and joins what they keep, in their order.
+    ///
+    /// Out of line (compiled for the baseline; the test itself runs at the frame's level):
+    /// inlined at the three places that call it, in every copy of the hot path, frames that
+    /// burn took 2–5 % more CPU (docs/performance.md, "Burning (Intel Xeon with AVX-512)").
     #[inline(never)]
     fn join_held(
         &mut self,

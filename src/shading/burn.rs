@@ -105,7 +105,7 @@ impl<const N: usize> BurnLanes<N> {
 
 /// [`burn_rule`] of `N` intensities (`N` at most 32) on one shell, with the same comparisons
 /// and roundings per lane, as loops over the lanes that the level's copy of the fur stage runs
-/// packed (a batch's entry test runs it on every lane of a burning frame).
+/// packed (step 1 of the fur stage runs it on every lane of a burning frame).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
 pub fn burn_rule_lanes<const N: usize>(
