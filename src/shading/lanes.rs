@@ -150,6 +150,38 @@ impl<const N: usize> Vec3xN<N> {
         out
     }
 
+    /// [`Vec3xN::normalize_or`] with the fallback computed only where a lane takes it: the same
+    /// lanes, without the fallback's work in the common batch where none does (a fallback that
+    /// is itself a normalisation costs as much as the vector's own).
+    #[inline(always)]
+    pub fn normalize_or_else(&self, fallback: impl FnOnce() -> Self) -> Self {
+        let mut rcp = self.dot(self);
+        for r in &mut rcp {
+            *r = 1.0 / r.sqrt();
+        }
+        let mut out = *self;
+        let mut keep = [0u32; N];
+        let mut every = u32::MAX;
+        for i in 0..N {
+            // As in `normalize_or`: finite and positive, one integer compare.
+            let r = rcp[i];
+            keep[i] = lane_mask(r.to_bits().wrapping_sub(1) < f32::MAX.to_bits());
+            every &= keep[i];
+            out.x[i] = self.x[i] * r;
+            out.y[i] = self.y[i] * r;
+            out.z[i] = self.z[i] * r;
+        }
+        if every == 0 {
+            let fallback = fallback();
+            for i in 0..N {
+                out.x[i] = select_bits(keep[i], out.x[i], fallback.x[i]);
+                out.y[i] = select_bits(keep[i], out.y[i], fallback.y[i]);
+                out.z[i] = select_bits(keep[i], out.z[i], fallback.z[i]);
+            }
+        }
+        out
+    }
+
     /// `Vec3::normalize_or_zero`.
     #[inline(always)]
     pub fn normalize_or_zero(&self) -> Self {
@@ -238,6 +270,11 @@ pub(crate) mod tests {
             let sum = va.add_scaled(s, &vb);
             let decoded = va.scale_minus_one(2.0);
             let normal_or = va.normalize_or(&vc);
+            let mut fell_back = false;
+            let normal_or_else = va.normalize_or_else(|| {
+                fell_back = true;
+                vc
+            });
             let normal = va.normalize_or_zero();
             let zero = va.is_zero();
             let scaled = va.scaled(s);
@@ -262,6 +299,12 @@ pub(crate) mod tests {
                     a[i]
                 );
                 assert_eq!(
+                    bits(normal_or_else.lane(i)),
+                    bits(a[i].normalize_or(c[i])),
+                    "normalize_or_else {:?}",
+                    a[i]
+                );
+                assert_eq!(
                     bits(normal.lane(i)),
                     bits(a[i].normalize_or_zero()),
                     "normalize_or_zero {:?}",
@@ -269,6 +312,12 @@ pub(crate) mod tests {
                 );
                 assert_eq!(zero[i], a[i] == Vec3::ZERO, "is_zero {:?}", a[i]);
             }
+            // The fallback is computed exactly where a lane takes it.
+            let takes = (0..N).any(|i| {
+                let rcp = 1.0 / a[i].length();
+                !(rcp.is_finite() && rcp > 0.0)
+            });
+            assert_eq!(fell_back, takes, "fallback computed {fell_back} {a:?}");
         }
     }
 }

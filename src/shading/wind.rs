@@ -295,7 +295,7 @@ pub fn bend_tangent_lanes<const N: usize>(
 ) -> Vec3xN<N> {
     tangent
         .add_scaled([finite_or_zero(fraction); N], wind_tangent_space)
-        .normalize_or(&tangent.normalize_or_zero())
+        .normalize_or_else(|| tangent.normalize_or_zero())
 }
 
 #[cfg(test)]
