@@ -365,6 +365,19 @@ impl Spot {
         }
     }
 
+    /// Whether this spot's weight is surely 0 at every point of the triangle whose object-space
+    /// corners are `corners` (fragments interpolated inside it): an ellipsoid the triangle
+    /// lies outside of ([`shading::ellipsoid_surely_outside`]). `false` when unsure, and for
+    /// the other kinds.
+    pub fn surely_misses(&self, corners: [Vec3; 3]) -> bool {
+        match *self {
+            Spot::Ellipsoid { centre, radii, .. } => {
+                shading::ellipsoid_surely_outside(corners, centre, radii)
+            }
+            _ => false,
+        }
+    }
+
     /// The spot's colour.
     #[inline(always)]
     pub fn colour(&self) -> Vec3 {
@@ -1164,6 +1177,11 @@ pub struct FurBatch<'a, const N: usize> {
     charred: u32,
     /// Each charred lane's factor on the strand colour.
     char_factor: [f32; N],
+    /// The triangle (corner addresses) `spots_missed` was found for.
+    spots_triangle: Option<[usize; 3]>,
+    /// Bit `s`: spot `s` surely misses that triangle ([`Spot::surely_misses`]), its weight 0
+    /// on every lane of it.
+    spots_missed: u64,
 }
 
 /// Quads of one triangle held for step 1 of the fur stage ([`FurBatch::hold`]): up to `N/4`
@@ -1264,6 +1282,8 @@ impl<const N: usize> Default for FurBatch<'_, N> {
             footprint: [0.0; N],
             charred: 0,
             char_factor: [0.0; N],
+            spots_triangle: None,
+            spots_missed: 0,
         }
     }
 }
@@ -1717,10 +1737,31 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         }
         // Step 4: the spots, then the burn's charring.
         if !p.spots.is_empty() {
-            let object = varyings.vec3(OBJECT);
-            let unit_normals = varyings.vec3(NORMAL).normalize_or_zero();
-            for spot in &p.spots {
-                let weights = spot.weights_lanes(&object, &unit_normals);
+            // Spots that surely miss the batch's triangle give every lane the weight 0 without
+            // their arithmetic (found once a triangle).
+            if self.spots_triangle != Some(varyings.triangle) {
+                self.spots_triangle = Some(varyings.triangle);
+                let corners = varyings
+                    .corners
+                    .map(|c| Vec3::new(c[OBJECT], c[OBJECT + 1], c[OBJECT + 2]));
+                self.spots_missed = p.spots.iter().enumerate().fold(0, |missed, (s, spot)| {
+                    missed | (u64::from(s < 64 && spot.surely_misses(corners)) << (s % 64))
+                });
+            }
+            let missed = self.spots_missed;
+            let some_hit = (0..p.spots.len()).any(|s| s >= 64 || missed & (1 << s) == 0);
+            let (object, unit_normals) = if some_hit {
+                let object = varyings.vec3(OBJECT);
+                (object, varyings.vec3(NORMAL).normalize_or_zero())
+            } else {
+                (Vec3xN::splat(Vec3::ZERO), Vec3xN::splat(Vec3::ZERO))
+            };
+            for (s, spot) in p.spots.iter().enumerate() {
+                let weights = if s < 64 && missed & (1 << s) != 0 {
+                    [0.0; N]
+                } else {
+                    spot.weights_lanes(&object, &unit_normals)
+                };
                 strand = shading::apply_spot_lanes(&strand, spot.colour(), weights);
             }
         }

@@ -54,6 +54,47 @@ pub fn ellipsoid_spot_intensity_lanes<const N: usize>(
     ramp_lanes(minus_distance, -1.0, -saturate(inner))
 }
 
+/// Whether every point of the triangle `corners` lies outside the ellipsoid of
+/// [`ellipsoid_spot_intensity`] by a margin that rounding cannot cross, so that every fragment
+/// interpolated inside it (a convex combination of the corners, weights summing to 1 up to
+/// rounding, in `f32`) gets the weight 0 exactly: the batch can skip the spot's arithmetic.
+///
+/// The test, in `f64`: each corner's offset from the centre over the radii, the box around
+/// the three offsets grown on each axis by `10⁻⁵·(the largest magnitude involved + 1)/radius`
+/// (a hundredfold the error of `f32` interpolation and of the spot's own subtraction and
+/// division), and the box's nearest point to the origin at least `√1.001` away, where the
+/// weight is 0 from distance 1 on. `false` for any non-finite corner, centre or radius, or
+/// an empty ellipsoid (whose weight is 0 anyway).
+pub fn ellipsoid_surely_outside(corners: [Vec3; 3], centre: Vec3, radii: Vec3) -> bool {
+    let r = radii.abs();
+    if !(r.x > 0.0 && r.y > 0.0 && r.z > 0.0 && r.is_finite() && centre.is_finite()) {
+        return false;
+    }
+    if !corners.iter().all(|c| c.is_finite()) {
+        return false;
+    }
+    let mut nearest_squared = 0.0f64;
+    for axis in 0..3 {
+        let (c, radius) = (f64::from(centre[axis]), f64::from(r[axis]));
+        let at = corners.map(|p| f64::from(p[axis]));
+        let largest = at.iter().fold(c.abs(), |m, v| m.max(v.abs()));
+        let slack = 1e-5 * (largest + 1.0) / radius;
+        let offsets = at.map(|v| (v - c) / radius);
+        let low = offsets.iter().copied().fold(f64::INFINITY, f64::min) - slack;
+        let high = offsets.iter().copied().fold(f64::NEG_INFINITY, f64::max) + slack;
+        // The box's nearest coordinate to 0 on this axis (0 where the box straddles it).
+        let nearest = if low > 0.0 {
+            low
+        } else if high < 0.0 {
+            -high
+        } else {
+            0.0
+        };
+        nearest_squared += nearest * nearest;
+    }
+    nearest_squared >= 1.001
+}
+
 /// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits (`pow01_lanes`).
 #[inline(always)]
 pub fn light_spot_lobe_lanes<const N: usize>(cosine: [f32; N], exponent: f32) -> [f32; N] {
@@ -309,6 +350,69 @@ pub fn light_stripe_intensity(
 mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
+
+    #[test]
+    fn a_triangle_surely_outside_gives_the_weight_zero_at_every_interpolated_point() {
+        let mut rng = Lcg::new(77);
+        let (mut outside, mut unsure) = (0, 0);
+        for k in 0..4000 {
+            let centre = rng.cube() * 5.0;
+            let radii = Vec3::new(
+                rng.range(0.05, 3.0),
+                rng.range(0.05, 3.0),
+                rng.range(0.05, 3.0),
+            );
+            // Triangles around the ellipsoid's surface, small and large, some far out.
+            let size = [0.01, 0.3, 2.0][k % 3];
+            let reach = [1.0, 1.05, 1.5, 4.0][k % 4];
+            let anchor = centre + rng.cube().normalize_or(Vec3::X) * radii * reach;
+            let corners = [0, 1, 2].map(|_| anchor + rng.cube() * size);
+            if !ellipsoid_surely_outside(corners, centre, radii) {
+                unsure += 1;
+                continue;
+            }
+            outside += 1;
+            // Points as a fur batch interpolates them, in f32, weights summing to 1 up to
+            // rounding and slightly negative at the edges.
+            for j in 0..200 {
+                let raw = [
+                    rng.range(-1e-7, 1.0),
+                    rng.range(-1e-7, 1.0),
+                    rng.range(-1e-7, 1.0),
+                ];
+                let sum = (raw[0] + raw[1]) + raw[2];
+                let w = raw.map(|r| r * (1.0 / sum));
+                let w = if j == 0 { [1.0, 0.0, 0.0] } else { w };
+                let point = (corners[0] * w[0] + corners[1] * w[1]) + corners[2] * w[2];
+                let weight = ellipsoid_spot_intensity(point, centre, radii, 0.5);
+                assert_eq!(weight.to_bits(), 0.0f32.to_bits(), "{corners:?} {w:?}");
+                let lanes =
+                    ellipsoid_spot_intensity_lanes(&Vec3xN::<4>::splat(point), centre, radii, 0.5);
+                assert_eq!(lanes.map(f32::to_bits), [0; 4]);
+            }
+        }
+        // The test finds most triangles clear of the ellipsoid and leaves those that touch it.
+        assert!(outside > 1500 && unsure > 1000, "{outside} {unsure}");
+        // A triangle through the centre, and non-finite input, are never called outside.
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let through = [c, c + Vec3::X * 9.0, c + Vec3::Y * 9.0];
+        assert!(!ellipsoid_surely_outside(through, c, Vec3::ONE));
+        let far = [
+            Vec3::splat(50.0),
+            Vec3::splat(51.0),
+            Vec3::new(50.0, 51.0, 50.0),
+        ];
+        assert!(ellipsoid_surely_outside(far, c, Vec3::ONE));
+        assert!(!ellipsoid_surely_outside(
+            far,
+            c,
+            Vec3::new(1.0, f32::NAN, 1.0)
+        ));
+        assert!(!ellipsoid_surely_outside(far, c, Vec3::new(1.0, 0.0, 1.0)));
+        let mut bad = far;
+        bad[1].x = f32::INFINITY;
+        assert!(!ellipsoid_surely_outside(bad, c, Vec3::ONE));
+    }
 
     /// The lane versions at 4 and 8 lanes against the scalar terms, lane by lane.
     fn assert_lanes_are_the_scalar_spot_terms<const N: usize>(seed: u64) {
