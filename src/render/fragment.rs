@@ -365,15 +365,22 @@ impl Spot {
         }
     }
 
-    /// Whether this spot's weight is surely 0 at every point of the triangle whose object-space
-    /// corners are `corners` (fragments interpolated inside it): an ellipsoid the triangle
-    /// lies outside of ([`shading::ellipsoid_surely_outside`]). `false` when unsure, and for
-    /// the other kinds.
-    pub fn surely_misses(&self, corners: [Vec3; 3]) -> bool {
+    /// Whether this spot's weight is surely 0 at every fragment of the triangle whose corners
+    /// have these object-space points and normals (fragments interpolated inside it): an
+    /// ellipsoid the triangle lies outside of ([`shading::ellipsoid_surely_outside`]), or a
+    /// light spot whose cosine every fragment's normal keeps below the cosine from which it
+    /// has weight ([`shading::light_spot_surely_outside`]). `false` when unsure, and for the
+    /// other kinds.
+    pub fn surely_misses(&self, object: [Vec3; 3], normals: [Vec3; 3]) -> bool {
         match *self {
             Spot::Ellipsoid { centre, radii, .. } => {
-                shading::ellipsoid_surely_outside(corners, centre, radii)
+                shading::ellipsoid_surely_outside(object, centre, radii)
             }
+            Spot::Light {
+                outside_below,
+                cosine_direction,
+                ..
+            } => shading::light_spot_surely_outside(normals, cosine_direction, outside_below),
             _ => false,
         }
     }
@@ -1738,14 +1745,19 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         // Step 4: the spots, then the burn's charring.
         if !p.spots.is_empty() {
             // Spots that surely miss the batch's triangle give every lane the weight 0 without
-            // their arithmetic (found once a triangle).
+            // their arithmetic (found once a triangle), and where all do, the lanes' points and
+            // normals are not interpolated.
             if self.spots_triangle != Some(varyings.triangle) {
                 self.spots_triangle = Some(varyings.triangle);
-                let corners = varyings
-                    .corners
-                    .map(|c| Vec3::new(c[OBJECT], c[OBJECT + 1], c[OBJECT + 2]));
+                let corner = |c: usize| {
+                    varyings
+                        .corners
+                        .map(|v| Vec3::new(v[c], v[c + 1], v[c + 2]))
+                };
+                let (object, normals) = (corner(OBJECT), corner(NORMAL));
                 self.spots_missed = p.spots.iter().enumerate().fold(0, |missed, (s, spot)| {
-                    missed | (u64::from(s < 64 && spot.surely_misses(corners)) << (s % 64))
+                    let misses = s < 64 && spot.surely_misses(object, normals);
+                    missed | (u64::from(misses) << (s % 64))
                 });
             }
             let missed = self.spots_missed;

@@ -136,8 +136,9 @@ pub use spots::{
     apply_spot, apply_spot_lanes, apply_spots, ellipsoid_spot_intensity,
     ellipsoid_spot_intensity_lanes, ellipsoid_surely_outside, light_spot_cosine,
     light_spot_cosine_above, light_spot_cosine_below, light_spot_intensity, light_spot_lobe,
-    light_spot_lobe_lanes, light_stripe_band, light_stripe_intensity, point_light_cosine,
-    point_light_intensity, reach_falloff, spot_gradient, spot_gradient_lanes, stripe_intensity,
+    light_spot_lobe_lanes, light_spot_surely_outside, light_stripe_band, light_stripe_intensity,
+    point_light_cosine, point_light_intensity, reach_falloff, spot_gradient, spot_gradient_lanes,
+    stripe_intensity,
 };
 pub use tangent_space::{sin_between, to_tangent_space};
 pub use wind::{

@@ -95,6 +95,45 @@ pub fn ellipsoid_surely_outside(corners: [Vec3; 3], centre: Vec3, radii: Vec3) -
     nearest_squared >= 1.001
 }
 
+/// Whether every fragment of the triangle whose vertex normals are `normals` surely has a
+/// cosine `n̂·d` below `below` with the unit direction `direction` (`n̂` the fragment's normal,
+/// a convex combination of the vertex normals renormalised in `f32`, or zero where it has no
+/// direction): then a light spot whose weight is 0 below that cosine skips the triangle.
+///
+/// Why it is safe: positive combinations of vectors inside a cone stay inside it, so with the
+/// unit vertex normals within an angle `β` of their normalised sum `a`, every fragment's
+/// normal lies within `β` of `a` and at least `∠(a, d) − β` from `d`. The test (in `f64`)
+/// asks that angle to exceed `acos(below)` by 10⁻³ radians, far above the rounding of the
+/// fragment's interpolation, normalisation and dot product (about 10⁻⁶); a zero normal has
+/// cosine 0, below any positive `below`. `false` when unsure: a vertex normal without
+/// direction, a cone of 80° or more, a non-finite input, or `below` outside `(−1, 1]`.
+pub fn light_spot_surely_outside(normals: [Vec3; 3], direction: Vec3, below: f32) -> bool {
+    if !(below > -1.0 && below <= 1.0 && direction.is_finite()) {
+        return false;
+    }
+    let unit = normals.map(|n| n.as_dvec3().normalize_or_zero());
+    if unit
+        .iter()
+        .any(|n| *n == glam::DVec3::ZERO || !n.is_finite())
+    {
+        return false;
+    }
+    let axis = (unit[0] + unit[1] + unit[2]).normalize_or_zero();
+    if axis == glam::DVec3::ZERO {
+        return false;
+    }
+    let angle = |a: glam::DVec3, b: glam::DVec3| a.dot(b).clamp(-1.0, 1.0).acos();
+    let cone = unit.iter().map(|&n| angle(n, axis)).fold(0.0f64, f64::max);
+    if cone >= 80f64.to_radians() {
+        return false;
+    }
+    let d = direction.as_dvec3().normalize_or_zero();
+    if d == glam::DVec3::ZERO {
+        return false;
+    }
+    angle(axis, d) - cone >= f64::from(below).acos() + 1e-3
+}
+
 /// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits (`pow01_lanes`).
 #[inline(always)]
 pub fn light_spot_lobe_lanes<const N: usize>(cosine: [f32; N], exponent: f32) -> [f32; N] {
@@ -350,6 +389,57 @@ pub fn light_stripe_intensity(
 mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
+
+    #[test]
+    fn a_triangle_surely_outside_a_light_spot_has_every_cosine_below() {
+        let mut rng = Lcg::new(78);
+        let (mut outside, mut unsure) = (0, 0);
+        for k in 0..4000 {
+            let direction = rng.cube().normalize_or(Vec3::Y);
+            let below = [0.97, 0.5, 0.0, -0.3][k % 4];
+            // Vertex normals in a cone of a few degrees to a few tens, at various angles from
+            // the direction; not unit, as interpolated normals are not.
+            let centre = rng.cube().normalize_or(Vec3::X);
+            let spread = [0.02, 0.2, 0.6][k % 3];
+            let normals = [0, 1, 2].map(|_| {
+                (centre + rng.cube() * spread).normalize_or(Vec3::X) * rng.range(0.5, 2.0)
+            });
+            if !light_spot_surely_outside(normals, direction, below) {
+                unsure += 1;
+                continue;
+            }
+            outside += 1;
+            for j in 0..200 {
+                let raw = [
+                    rng.range(-1e-7, 1.0),
+                    rng.range(-1e-7, 1.0),
+                    rng.range(-1e-7, 1.0),
+                ];
+                let sum = (raw[0] + raw[1]) + raw[2];
+                let w = raw.map(|r| r * (1.0 / sum));
+                let w = if j == 0 { [0.0, 1.0, 0.0] } else { w };
+                let normal = (normals[0] * w[0] + normals[1] * w[1]) + normals[2] * w[2];
+                let cosine = normal.normalize_or_zero().dot(direction);
+                assert!(cosine < below, "{normals:?} {w:?} {cosine} {below}");
+            }
+        }
+        assert!(outside > 1000 && unsure > 1000, "{outside} {unsure}");
+        // Normals around the direction itself, or opposed ones, are never called outside.
+        let d = Vec3::new(0.6, 0.5, 0.8).normalize();
+        assert!(!light_spot_surely_outside([d, d, d], d, 0.97));
+        assert!(!light_spot_surely_outside(
+            [Vec3::X, -Vec3::X, Vec3::Y],
+            d,
+            0.97
+        ));
+        assert!(!light_spot_surely_outside(
+            [Vec3::ZERO, Vec3::Y, Vec3::Y],
+            d,
+            0.97
+        ));
+        assert!(light_spot_surely_outside([-d, -d, -d], d, 0.97));
+        assert!(!light_spot_surely_outside([-d, -d, -d], d, f32::NAN));
+    }
 
     #[test]
     fn a_triangle_surely_outside_gives_the_weight_zero_at_every_interpolated_point() {
