@@ -390,6 +390,22 @@ mod tests {
     use super::*;
     use crate::shading::test_support::{Lcg, assert_close};
 
+    /// Weights of a triangle's corners as a fur batch's lanes have them: summing to 1 up to
+    /// rounding, slightly negative at the edges; sample 0 is corner 0 itself.
+    fn lane_weights(rng: &mut Lcg, sample: usize) -> [f32; 3] {
+        if sample == 0 {
+            return [1.0, 0.0, 0.0];
+        }
+        let raw = [0; 3].map(|_| rng.range(-1e-7, 1.0));
+        let sum = (raw[0] + raw[1]) + raw[2];
+        raw.map(|r| r * (1.0 / sum))
+    }
+
+    /// `(a·wa + b·wb) + c·wc` in `f32`, as the batch interpolates a varying.
+    fn interpolate(corners: [Vec3; 3], w: [f32; 3]) -> Vec3 {
+        (corners[0] * w[0] + corners[1] * w[1]) + corners[2] * w[2]
+    }
+
     #[test]
     fn a_triangle_surely_outside_a_light_spot_has_every_cosine_below() {
         let mut rng = Lcg::new(78);
@@ -410,17 +426,9 @@ mod tests {
             }
             outside += 1;
             for j in 0..200 {
-                let raw = [
-                    rng.range(-1e-7, 1.0),
-                    rng.range(-1e-7, 1.0),
-                    rng.range(-1e-7, 1.0),
-                ];
-                let sum = (raw[0] + raw[1]) + raw[2];
-                let w = raw.map(|r| r * (1.0 / sum));
-                let w = if j == 0 { [0.0, 1.0, 0.0] } else { w };
-                let normal = (normals[0] * w[0] + normals[1] * w[1]) + normals[2] * w[2];
+                let normal = interpolate(normals, lane_weights(&mut rng, j));
                 let cosine = normal.normalize_or_zero().dot(direction);
-                assert!(cosine < below, "{normals:?} {w:?} {cosine} {below}");
+                assert!(cosine < below, "{normals:?} {normal:?} {cosine} {below}");
             }
         }
         assert!(outside > 1000 && unsure > 1000, "{outside} {unsure}");
@@ -462,18 +470,9 @@ mod tests {
                 continue;
             }
             outside += 1;
-            // Points as a fur batch interpolates them, in f32, weights summing to 1 up to
-            // rounding and slightly negative at the edges.
             for j in 0..200 {
-                let raw = [
-                    rng.range(-1e-7, 1.0),
-                    rng.range(-1e-7, 1.0),
-                    rng.range(-1e-7, 1.0),
-                ];
-                let sum = (raw[0] + raw[1]) + raw[2];
-                let w = raw.map(|r| r * (1.0 / sum));
-                let w = if j == 0 { [1.0, 0.0, 0.0] } else { w };
-                let point = (corners[0] * w[0] + corners[1] * w[1]) + corners[2] * w[2];
+                let w = lane_weights(&mut rng, j);
+                let point = interpolate(corners, w);
                 let weight = ellipsoid_spot_intensity(point, centre, radii, 0.5);
                 assert_eq!(weight.to_bits(), 0.0f32.to_bits(), "{corners:?} {w:?}");
                 let lanes =
