@@ -11,8 +11,18 @@
 //! where inlined it was copied at every call site of every fixed-function copy of the quad
 //! loop. The body stays ordinary Rust; only the instruction selection differs (VEX or EVEX
 //! encoding, three-operand forms, `blendv` or mask registers for selects, BMI shifts) and, at
-//! AVX-512, the batch width: the kernel runs with [`WIDE_LANES`] (16) lanes a batch instead of
-//! [`LANES`] (8), one 512-bit register of `f32` per lane array.
+//! AVX2 and AVX-512, the batch width: the kernel runs with [`WIDE_LANES`] (16) lanes a batch
+//! instead of the baseline's [`LANES`] (8), one 512-bit register of `f32` per lane array at
+//! AVX-512 and two 256-bit ones at AVX2.
+//!
+//! Why 16 lanes at AVX2 too. A batch has work that does not grow with its lanes (its set-up,
+//! the spots' test once a triangle, the call and the write-back) and its steps are one chain of
+//! dependent vector operations (texels, alpha test, shadow, tangent, lighting, eq. 3.7): with 16
+//! lanes the fixed work is paid once for 16 lanes and every step is two independent 256-bit
+//! operations. On the AMD EPYC (Zen 3) machine the batch's instructions fell from 367 to 309 a
+//! fragment and the frame's CPU by about 4 % (docs/performance.md, "Batches of 16 lanes at AVX2
+//! (AMD EPYC)"). While the stage was still inlined into the quad loop's copies, 16 AVX2 lanes
+//! had taken 41 % more CPU.
 //!
 //! The AVX-512 level, and why 16 lanes pay now. An earlier AVX-512 copy took 24 % more CPU than
 //! the baseline with 4-lane quads, then the same as AVX2 with 8-lane batches and 7–10 % more
@@ -172,12 +182,12 @@ impl std::str::FromStr for SimdLevel {
     }
 }
 
-/// Lanes of the batches a [`Kernel`] runs below AVX-512: two 4-lane quads, one 256-bit
-/// register of `f32` with AVX2, two 128-bit ones on the baseline.
+/// Lanes of the batches a [`Kernel`] runs on the baseline (`Scalar`, `Sse2`): two 4-lane
+/// quads, two 128-bit registers of `f32`.
 pub const LANES: usize = 8;
 
-/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx512`]: four quads, one 512-bit
-/// register of `f32`.
+/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx2`] and [`SimdLevel::Avx512`]:
+/// four quads, two 256-bit registers of `f32` or one 512-bit register.
 pub const WIDE_LANES: usize = 16;
 
 /// A piece of hot code compiled once per level: its [`Kernel::run`] must be `#[inline(always)]`,
@@ -192,8 +202,9 @@ pub trait Kernel {
 }
 
 /// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
-/// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline;
-/// below `Avx512`, [`BATCH_LANES_ENV`] can make it the baseline with 16-lane batches.
+/// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline
+/// with 8-lane batches, or 16 where [`BATCH_LANES_ENV`] asks; `Avx2` and `Avx512` their copies
+/// with 16-lane batches.
 ///
 /// Fuzz builds (`cfg(fuzzing)`, set by cargo-fuzz) hold the baseline copy alone: the fuzz targets
 /// look for panics and hangs on bad input, which every copy shares, and each copy is minutes of
@@ -209,9 +220,6 @@ pub fn dispatch<K: Kernel>(level: SimdLevel, kernel: K) -> K::Output {
             // SAFETY: the features `x86::avx512` enables were detected on this CPU (`detected`:
             // `x86::has_avx512`, which checks what `x86::avx512` enables).
             return unsafe { x86::avx512(kernel) };
-        }
-        if wide_batches_everywhere() {
-            return kernel.run::<WIDE_LANES>();
         }
         if level >= SimdLevel::Avx2 && detected >= SimdLevel::Avx2 {
             // SAFETY: the features `x86::avx2` enables were detected on this CPU (`detected`).
@@ -262,13 +270,11 @@ pub fn dispatch_level<K: LevelKernel>(level: SimdLevel, kernel: K) -> K::Output 
     kernel.run()
 }
 
-/// The environment variable that runs the fur stage's batches [`WIDE_LANES`] wide below
-/// [`SimdLevel::Avx512`] too: `16`, the one value it takes (unset or empty: the level decides).
-/// Those levels then run the baseline copy of the quad traversal with 16-lane batches, and the
-/// fur stage of each batch ([`dispatch_level`]) at the level, 16 lanes wide: the portable code
-/// of the AVX-512 copy (without its texture intrinsics), so that a CPU without AVX-512 checks
-/// that a lane's result never depends on the batch's width: `.ci/run` reruns the golden images
-/// so. For checking only; it is slower than the level's own copy.
+/// The environment variable that runs the fur stage's batches [`WIDE_LANES`] wide on the
+/// baseline too (`Scalar`'s rasterizer and `Sse2`): `16`, the one value it takes (unset or
+/// empty: 8 there). The baseline copy of the quad traversal then runs 16-lane batches, so that
+/// both widths run on the same code: a lane's result never depends on the batch's width
+/// (`tests/simd_levels.rs`). For checking only; AVX2 and AVX-512 run 16 lanes anyway.
 pub const BATCH_LANES_ENV: &str = "PELAGE_BATCH_LANES";
 
 /// An unknown value of [`BATCH_LANES_ENV`].
@@ -305,7 +311,7 @@ fn wide_batches_everywhere() -> bool {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     #[cfg_attr(fuzzing, allow(unused_imports))]
-    use super::{Kernel, LANES, LevelKernel, WIDE_LANES};
+    use super::{Kernel, LevelKernel, WIDE_LANES};
 
     /// x86-64-v3.
     pub(super) fn has_avx2() -> bool {
@@ -332,7 +338,7 @@ mod x86 {
     #[cfg(not(fuzzing))]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
     pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
-        kernel.run::<LANES>()
+        kernel.run::<WIDE_LANES>()
     }
 
     #[cfg(not(fuzzing))]
@@ -419,9 +425,9 @@ mod tests {
     }
 
     #[test]
-    fn batches_hold_16_lanes_at_avx512_only() {
+    fn batches_hold_16_lanes_from_avx2_on() {
         for level in SimdLevel::ALL {
-            let wide = level.capped() == SimdLevel::Avx512 || wide_batches_everywhere();
+            let wide = level.capped() >= SimdLevel::Avx2 || wide_batches_everywhere();
             let lanes = if wide { WIDE_LANES } else { LANES };
             assert_eq!(dispatch(level, Width), lanes, "{level}");
         }

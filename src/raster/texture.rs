@@ -1216,7 +1216,9 @@ impl NearestLookup<'_> {
             if N == alpha_gather::LANES && pairs512::available() {
                 return unsafe { alpha_gather::nearest(&u, &v, width, height, masks, plane) };
             }
-            if N == alpha_gather::AVX2_LANES && alpha_gather::avx2_available() {
+            if (N == alpha_gather::AVX2_LANES || N == 2 * alpha_gather::AVX2_LANES)
+                && alpha_gather::avx2_available()
+            {
                 return unsafe { alpha_gather::nearest_avx2(&u, &v, width, height, masks, plane) };
             }
         }
@@ -1387,8 +1389,9 @@ mod tests {
 
     #[test]
     fn nearest_lookups_of_eight_and_sixteen_lanes_are_single_lookups() {
-        // 16 lanes from the alpha plane of a wrapped level take `alpha_gather` where the CPU has
-        // AVX-512; the clamped sampler and the 4-byte texels take the portable loops.
+        // Lanes from the alpha plane of a wrapped level take `alpha_gather`: 16 with AVX-512
+        // (`nearest`), 8 or 16 with AVX2 (`nearest_avx2`, a register of 8 at a time); the
+        // clamped sampler and the 4-byte texels take the portable loops.
         nearest_lanes_are_single_lookups::<8>();
         nearest_lanes_are_single_lookups::<16>();
     }

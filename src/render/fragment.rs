@@ -16,7 +16,7 @@
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
 //! it finds each quad's level of detail and mip levels once and hands the quad's shaded lanes
 //! to a [`FurBatch`], which runs every step above on [`BATCH_LANES`] lanes of the tile's quads
-//! (16 in the AVX-512 copy of the hot path, [`crate::simd`]) at once in structure-of-arrays
+//! (16 in the AVX2 and AVX-512 copies of the hot path, [`crate::simd`]) at once in structure-of-arrays
 //! form (the texture pair's footprints with [`TrilinearPair::sample_lanes`], the alpha test as
 //! a lane mask, [`shading::ShadowLanes`] for step 6, lookup `k` of every lane in one batch;
 //! [`crate::shading::lanes`] for the rest). The golden tests render every scene with both.
@@ -1140,13 +1140,13 @@ fn entry_test_needed(textures: &LayerMaps<'_>, maps: &SurfaceMaps, p: &ShadePara
     p.burn.is_some() || (textures.shell && maps.length.is_some())
 }
 
-/// Lanes in a [`FurBatch`] below AVX-512 ([`crate::simd::LANES`]): two quads' worth, which
-/// plain per-lane loops turn into 256-bit instructions in the AVX2 copy of the hot path; the
-/// AVX-512 copy's batches hold [`crate::simd::WIDE_LANES`].
+/// Lanes in a [`FurBatch`] on the baseline copy of the hot path ([`crate::simd::LANES`]): two
+/// quads' worth; the AVX2 and AVX-512 copies' batches hold [`crate::simd::WIDE_LANES`], which
+/// plain per-lane loops turn into pairs of 256-bit instructions or single 512-bit ones.
 pub const BATCH_LANES: usize = crate::simd::LANES;
 
 /// Shaded fragments of a draw's quads in one tile waiting for the whole fur stage, which runs
-/// on `N` lanes at once ([`BATCH_LANES`], or [`crate::simd::WIDE_LANES`] in the AVX-512 copy)
+/// on `N` lanes at once ([`BATCH_LANES`], or [`crate::simd::WIDE_LANES`] at AVX2 and AVX-512)
 /// in structure-of-arrays form: the texture pair's footprints, texel conversion and filter
 /// ([`TrilinearPair::sample_lanes`]), the alpha test as a lane mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie

@@ -1,8 +1,8 @@
 //! The shell shadow's nearest alpha reads of a batch with gathers
 //! ([`super::NearestLookup::alpha_lanes`] from a level's alpha plane, where both axes wrap on a
-//! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), 8 with AVX2 ([`nearest_avx2`]), the
-//! coordinates, floors and addressing of the lanes in one register each, and their alpha bytes
-//! in one gather.
+//! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), 8 or 16 with AVX2 ([`nearest_avx2`],
+//! 8 a register), the coordinates, floors and addressing of the lanes in one register each, and
+//! their alpha bytes in one gather a register.
 //!
 //! Why intrinsics: written as portable loops, LLVM split the 16-lane coordinate steps into two
 //! 256-bit halves, widened the row products to 64 bits (`vpmullq`) and read the bytes as 16 scalar
@@ -105,7 +105,8 @@ pub(super) unsafe fn nearest<const N: usize>(
     out
 }
 
-/// Lanes [`nearest_avx2`] takes: a batch of the AVX2 level.
+/// Lanes of one AVX2 register in [`nearest_avx2`], which takes one or two of them (a batch of
+/// the baseline's width or of the AVX2 level's).
 pub(super) const AVX2_LANES: usize = 8;
 
 /// Whether this CPU has AVX2 (cached), which [`nearest_avx2`] runs.
@@ -121,11 +122,12 @@ pub(super) fn avx2_available() -> bool {
     false
 }
 
-/// [`nearest`] of an 8-lane batch with AVX2 (256-bit registers, one 8-lane gather): the same
-/// steps and the same bits.
+/// [`nearest`] of a batch of the AVX2 level with AVX2: 8 or 16 lanes, each 8 in 256-bit
+/// registers with one 8-lane gather; the same steps and the same bits.
 ///
 /// # Safety
-/// The CPU has AVX2 ([`avx2_available`]); `N` is [`AVX2_LANES`]; the rest as [`nearest`].
+/// The CPU has AVX2 ([`avx2_available`]); `N` is [`AVX2_LANES`] or twice it; the rest as
+/// [`nearest`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 pub(super) unsafe fn nearest_avx2<const N: usize>(
@@ -136,9 +138,10 @@ pub(super) unsafe fn nearest_avx2<const N: usize>(
     [mask_u, mask_v]: [i32; 2],
     plane: &[u8],
 ) -> [f32; N] {
-    assert!(N == AVX2_LANES);
-    let floor_of = |c: &[f32; N], size: u32| -> __m256i {
-        // SAFETY: `N` is 8, one 256-bit register.
+    assert!(N == AVX2_LANES || N == 2 * AVX2_LANES);
+    let floor_of = |c: &[f32], size: u32| -> __m256i {
+        assert!(c.len() == AVX2_LANES);
+        // SAFETY: 8 floats, one 256-bit register.
         let c = unsafe { _mm256_loadu_ps(c.as_ptr()) };
         let position = _mm256_sub_ps(
             _mm256_mul_ps(c, _mm256_set1_ps(size as f32)),
@@ -162,19 +165,26 @@ pub(super) unsafe fn nearest_avx2<const N: usize>(
         ));
         _mm256_add_epi32(truncated, rounded_up)
     };
-    let column = _mm256_and_si256(floor_of(u, width), _mm256_set1_epi32(mask_u));
-    let row = _mm256_and_si256(floor_of(v, height), _mm256_set1_epi32(mask_v));
-    let index = _mm256_add_epi32(
-        _mm256_mullo_epi32(row, _mm256_set1_epi32(width as i32)),
-        column,
-    );
-    // SAFETY: as in `nearest`: every 4-byte read is inside the padded plane.
-    let words = unsafe { _mm256_i32gather_epi32::<1>(plane.as_ptr().cast(), index) };
-    let bytes = _mm256_and_si256(words, _mm256_set1_epi32(0xff));
-    let y = _mm256_mul_ps(_mm256_cvtepi32_ps(bytes), _mm256_set1_ps(UNORM8_SCALE));
-    let alphas = _mm256_add_ps(y, _mm256_mul_ps(y, _mm256_set1_ps(UNORM8_CORRECTION)));
     let mut out = [0.0f32; N];
-    // SAFETY: `N` is 8: one register fills the array.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), alphas) };
+    // Eight lanes a register.
+    for ((u, v), out) in u
+        .chunks_exact(AVX2_LANES)
+        .zip(v.chunks_exact(AVX2_LANES))
+        .zip(out.chunks_exact_mut(AVX2_LANES))
+    {
+        let column = _mm256_and_si256(floor_of(u, width), _mm256_set1_epi32(mask_u));
+        let row = _mm256_and_si256(floor_of(v, height), _mm256_set1_epi32(mask_v));
+        let index = _mm256_add_epi32(
+            _mm256_mullo_epi32(row, _mm256_set1_epi32(width as i32)),
+            column,
+        );
+        // SAFETY: as in `nearest`: every 4-byte read is inside the padded plane.
+        let words = unsafe { _mm256_i32gather_epi32::<1>(plane.as_ptr().cast(), index) };
+        let bytes = _mm256_and_si256(words, _mm256_set1_epi32(0xff));
+        let y = _mm256_mul_ps(_mm256_cvtepi32_ps(bytes), _mm256_set1_ps(UNORM8_SCALE));
+        let alphas = _mm256_add_ps(y, _mm256_mul_ps(y, _mm256_set1_ps(UNORM8_CORRECTION)));
+        // SAFETY: `out` is a chunk of 8 floats: one register fills it.
+        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), alphas) };
+    }
     out
 }
