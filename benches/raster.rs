@@ -135,7 +135,9 @@ impl Kernel for PairReads<'_, '_> {
     fn run<const BATCH: usize>(self) -> f32 {
         let mut sum = 0.0f32;
         for (u, v) in self.points {
-            let channels = self.reads.sample_lanes(u, v, self.frac);
+            let channels = self
+                .reads
+                .sample_lanes(u, v, self.frac, SimdLevel::active());
             sum += channels[3][0] + channels[7][7];
         }
         sum

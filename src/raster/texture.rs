@@ -23,6 +23,7 @@
 //!   `⌊λ⌋ + 1` bilinearly and returns `lerp(level0, level1, λ − ⌊λ⌋)`.
 
 use super::RasterError;
+use crate::simd::SimdLevel;
 use glam::{Vec2, Vec4};
 use wide::{f32x4, i32x4};
 
@@ -959,7 +960,9 @@ impl TrilinearPair<'_> {
     /// fraction. The footprints (the coordinate clamp, the floor, the weights, the addressing)
     /// are plain loops over the lanes, which LLVM packs as wide as the level's copy of the hot
     /// path allows; each lane's texels are then converted and filtered as today's single
-    /// sample does, both textures' eight channels at once.
+    /// sample does, both textures' eight channels at once. `level` caps the instructions the
+    /// reads may use: the AVX-512 path (`pairs512`, 16 lanes) runs only at
+    /// [`SimdLevel::Avx512`] on a CPU that has it; the bits are the same either way.
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn sample_lanes<const N: usize>(
@@ -967,6 +970,7 @@ impl TrilinearPair<'_> {
         u: &[f32; N],
         v: &[f32; N],
         frac: &[f32; N],
+        level: SimdLevel,
     ) -> PairChannels<N> {
         let [lower, upper] = self.first.levels;
         let mut any_blend = 0u32;
@@ -986,7 +990,7 @@ impl TrilinearPair<'_> {
         // loop cost as much.
         if let Some([converted_lower, converted_upper]) = self.converted {
             #[cfg(target_arch = "x86_64")]
-            if N == pairs512::LANES && pairs512::available() {
+            if level >= SimdLevel::Avx512 && N == pairs512::LANES && pairs512::available() {
                 // SAFETY: AVX-512 F, BW, DQ and VL were detected just above, `N` is 16, and
                 // the footprints address their levels as below (`high` is the upper level's
                 // for every lane whenever a lane blends).
@@ -1197,12 +1201,18 @@ impl NearestLookup<'_> {
     /// [`Sampler::alpha_nearest_in`] at `N` points `(u[i], v[i])` (`N` a multiple of 4), the
     /// same values: the coordinate clamp, the floor and the addressing as plain loops over
     /// the lanes, or, from the alpha plane of a level that wraps on power-of-two sizes, as one
-    /// gather of 16 lanes (AVX-512) or 8 (AVX2) where the CPU has it (`alpha_gather`).
+    /// gather of 16 lanes (AVX-512) or one a register of 8 (AVX2) where `level` allows it and
+    /// the CPU has it (`alpha_gather`); the bits are the same either way.
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
-    pub fn alpha_lanes<const N: usize>(&self, u: [f32; N], v: [f32; N]) -> [f32; N] {
-        // The gathers where the CPU has them: the alpha plane of a level whose axes both wrap
-        // on power-of-two sizes.
+    pub fn alpha_lanes<const N: usize>(
+        &self,
+        u: [f32; N],
+        v: [f32; N],
+        level: SimdLevel,
+    ) -> [f32; N] {
+        // The gathers where the level and the CPU allow them: the alpha plane of a level whose
+        // axes both wrap on power-of-two sizes.
         #[cfg(target_arch = "x86_64")]
         if let Some(plane) = self.converted
             && let (Some(mask_u), Some(mask_v)) = (self.u.wrap_mask, self.v.wrap_mask)
@@ -1213,10 +1223,11 @@ impl NearestLookup<'_> {
             // the lanes each takes, both axes wrap on the level's power-of-two sizes
             // (`wrap_mask` is `size − 1`), and `with_converted` took a padded plane of this
             // level's texel count.
-            if N == alpha_gather::LANES && pairs512::available() {
+            if level >= SimdLevel::Avx512 && N == alpha_gather::LANES && pairs512::available() {
                 return unsafe { alpha_gather::nearest(&u, &v, width, height, masks, plane) };
             }
-            if (N == alpha_gather::AVX2_LANES || N == 2 * alpha_gather::AVX2_LANES)
+            if level >= SimdLevel::Avx2
+                && (N == alpha_gather::AVX2_LANES || N == 2 * alpha_gather::AVX2_LANES)
                 && alpha_gather::avx2_available()
             {
                 return unsafe { alpha_gather::nearest_avx2(&u, &v, width, height, masks, plane) };
@@ -1433,13 +1444,17 @@ mod tests {
                     let (u, v): (Vec<f32>, Vec<f32>) = (0..N as u32).map(point).unzip();
                     let (u, v): ([f32; N], [f32; N]) =
                         (u.try_into().expect("N"), v.try_into().expect("N"));
-                    let got = lookup.alpha_lanes(u, v);
-                    let alphas = from_alphas.alpha_lanes(u, v);
-                    assert_eq!(
-                        alphas.map(f32::to_bits),
-                        got.map(f32::to_bits),
-                        "alpha plane"
-                    );
+                    let got = lookup.alpha_lanes(u, v, SimdLevel::detected());
+                    // The alpha plane's reads at every level (the gathers where the level and
+                    // the CPU allow them, the portable loops below).
+                    for simd in SimdLevel::available() {
+                        let alphas = from_alphas.alpha_lanes(u, v, simd);
+                        assert_eq!(
+                            alphas.map(f32::to_bits),
+                            got.map(f32::to_bits),
+                            "alpha plane at {simd}"
+                        );
+                    }
                     for i in 0..N {
                         let want = sampler.alpha_nearest_in(level, Vec2::new(u[i], v[i]));
                         assert_eq!(got[i].to_bits(), want.to_bits(), "({}, {})", u[i], v[i]);
@@ -1563,15 +1578,26 @@ mod tests {
                             frac
                         });
                         let (u, v) = (uvs.map(|uv| uv.x), uvs.map(|uv| uv.y));
-                        let lanes = pair.sample_lanes(&u, &v, &frac);
-                        let from_bytes = bytes.sample_lanes(&u, &v, &frac);
+                        let best = SimdLevel::detected();
+                        let lanes = pair.sample_lanes(&u, &v, &frac, best);
+                        // Every level's reads (the AVX-512 path where the CPU has it, the
+                        // portable loops below it) give the same bits.
+                        for level in SimdLevel::available() {
+                            let at = pair.sample_lanes(&u, &v, &frac, level);
+                            assert_eq!(
+                                at.map(|c| c.map(f32::to_bits)),
+                                lanes.map(|c| c.map(f32::to_bits)),
+                                "{level} against {best}"
+                            );
+                        }
+                        let from_bytes = bytes.sample_lanes(&u, &v, &frac, best);
                         assert_eq!(
                             lanes.map(|c| c.map(f32::to_bits)),
                             from_bytes.map(|c| c.map(f32::to_bits)),
                             "converted texels against bytes"
                         );
                         let first = |x: &[f32; 16]| -> [f32; 8] { std::array::from_fn(|i| x[i]) };
-                        let eight = pair.sample_lanes(&first(&u), &first(&v), &first(&frac));
+                        let eight = pair.sample_lanes(&first(&u), &first(&v), &first(&frac), best);
                         assert_eq!(
                             eight.map(|c| c.map(f32::to_bits)),
                             lanes.map(|c| first(&c).map(f32::to_bits)),
@@ -1581,6 +1607,7 @@ mod tests {
                             &[u[0], u[1], u[2], u[3]],
                             &[v[0], v[1], v[2], v[3]],
                             &[frac[0], frac[1], frac[2], frac[3]],
+                            best,
                         );
                         for i in 0..16 {
                             let single = s.trilinear_pair(&a, &b, lods[i]).expect("same shape");
@@ -1827,9 +1854,11 @@ mod tests {
                     }
                     let points: [Vec2; 4] =
                         std::array::from_fn(|i| awkward_coordinates(k * 4 + i as u32));
-                    let alphas = s
-                        .nearest_lookup(a)
-                        .alpha_lanes(points.map(|p| p.x), points.map(|p| p.y));
+                    let alphas = s.nearest_lookup(a).alpha_lanes(
+                        points.map(|p| p.x),
+                        points.map(|p| p.y),
+                        SimdLevel::detected(),
+                    );
                     for (alpha, point) in alphas.iter().zip(points) {
                         assert_eq!(alpha.to_bits(), s.alpha_nearest_in(a, point).to_bits());
                     }

@@ -1588,7 +1588,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         self.charred = 0;
         // Step 3: the colour and tangent maps.
         let texels = match &self.pair {
-            Some(pair) => pair.sample_lanes(&u, &v, &frac),
+            Some(pair) => pair.sample_lanes(&u, &v, &frac, p.simd),
             None => {
                 let mut texels = [[0.0f32; N]; 8];
                 for i in 0..len {
@@ -1725,7 +1725,7 @@ impl<'a, const N: usize> FurBatch<'a, N> {
                         let mut alphas = [[0.0f32; N]; 4];
                         for (j, alpha) in alphas.iter_mut().enumerate().take(chunk) {
                             let (u, v) = sums.point(k + j as u32);
-                            *alpha = lookup.alpha_lanes(u, v);
+                            *alpha = lookup.alpha_lanes(u, v, p.simd);
                         }
                         for alpha in &alphas[..chunk] {
                             sums.add(*alpha);
