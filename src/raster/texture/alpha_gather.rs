@@ -105,8 +105,8 @@ pub(super) unsafe fn nearest<const N: usize>(
     out
 }
 
-/// Lanes of one AVX2 register in [`nearest_avx2`], which takes one or two of them (a batch of
-/// the baseline's width or of the AVX2 level's).
+/// Lanes of one AVX2 register in [`nearest_avx2`], which takes one or two of them (the AVX2
+/// level's batches hold two).
 pub(super) const AVX2_LANES: usize = 8;
 
 /// Whether this CPU has AVX2 (cached), which [`nearest_avx2`] runs.
