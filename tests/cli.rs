@@ -281,6 +281,107 @@ fn bench_race_prints_both_backends_and_their_ratio() {
     );
 }
 
+/// `pelage bench --against BUILD ARGS --json`, parsed (this test binary against itself).
+fn bench_against(args: &[&str]) -> Output {
+    let mut all = vec![
+        "bench",
+        "--against",
+        env!("CARGO_BIN_EXE_pelage"),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--frames",
+        "1",
+        "--rounds",
+        "2",
+    ];
+    all.extend(args);
+    all.push("--json");
+    pelage(&all)
+}
+
+#[test]
+fn bench_against_another_build_compares_them_round_by_round() {
+    let parse = |o: &Output| -> serde_json::Value {
+        assert!(o.status.success(), "{}", stderr(o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"))
+    };
+    let in_turn = parse(&bench_against(&["--threads", "1"]));
+    assert_eq!(in_turn["mode"], "in turn");
+    assert!(in_turn["cpu"].as_str().is_some_and(|c| !c.is_empty()));
+    let rounds = in_turn["rounds"].as_array().expect("rounds");
+    assert_eq!(rounds.len(), 2);
+    for round in rounds {
+        for key in ["median_cpu_ratio", "min_cpu_ratio"] {
+            let ratio = round[key].as_f64().expect("a ratio");
+            assert!(ratio.is_finite() && ratio > 0.0, "{round}");
+        }
+        // The same binary on the same scene: the same work.
+        assert_eq!(
+            round["this"]["fragments_per_frame"],
+            round["against"]["fragments_per_frame"]
+        );
+        let ratio = round["against"]["median_cpu_ms"].as_f64().expect("ms")
+            / round["this"]["median_cpu_ms"].as_f64().expect("ms");
+        assert_eq!(round["median_cpu_ratio"].as_f64(), Some(ratio));
+    }
+    let spread = &in_turn["median_cpu_ratio"];
+    let (min, median, max) = (
+        spread["min"].as_f64().expect("min"),
+        spread["median"].as_f64().expect("median"),
+        spread["max"].as_f64().expect("max"),
+    );
+    assert!(min <= median && median <= max, "{spread}");
+    // Together: a core each where the process may run on two, else refused by name.
+    let allowed = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            let line = s.lines().find(|l| l.starts_with("Cpus_allowed_list:"))?;
+            let list = line.split(':').nth(1)?.trim().to_string();
+            Some(
+                list.split(',')
+                    .map(|r| match r.split_once('-') {
+                        Some((a, b)) => {
+                            b.parse::<usize>()
+                                .unwrap_or(0)
+                                .saturating_sub(a.parse::<usize>().unwrap_or(0))
+                                + 1
+                        }
+                        None => 1,
+                    })
+                    .sum::<usize>(),
+            )
+        });
+    let together = bench_against(&["--together"]);
+    match allowed {
+        Some(n) if n >= 2 => assert_eq!(parse(&together)["mode"], "together"),
+        Some(_) => {
+            assert_eq!(together.status.code(), Some(2), "{}", stderr(&together));
+            assert!(stderr(&together).contains("two cores"));
+        }
+        None => {}
+    }
+}
+
+#[test]
+fn bench_against_refuses_what_it_cannot_compare() {
+    refused(
+        &["bench", "--against", "no/such/pelage"],
+        "--against no/such/pelage: no such file",
+    );
+    refused(&["bench", "--rounds", "3"], "--against");
+    refused(&["bench", "--together"], "--against");
+    let me = env!("CARGO_BIN_EXE_pelage");
+    refused(&["bench", "--against", me, "--race"], "--race");
+    refused(
+        &["bench", "--against", me, "--together", "--threads", "2"],
+        "one thread",
+    );
+    refused(&["bench", "--against", me, "--rounds", "0"], "--rounds");
+}
+
 #[test]
 fn bench_refuses_an_unknown_backend_and_a_gpu_it_lacks() {
     refused(&["bench", "--backend", "vulkan"], "--backend");

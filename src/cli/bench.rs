@@ -45,12 +45,32 @@ pub struct BenchArgs {
     /// default the software one (lavapipe).
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
+    /// Compare this build with another pelage binary: both run `bench` with these arguments,
+    /// as child processes, round after round, and the other's CPU time a frame over this
+    /// build's is printed per round, with its median and range, beside the CPU model.
+    #[arg(long, value_name = "PELAGE", conflicts_with_all = ["race", "backend", "adapter"])]
+    pub against: Option<std::path::PathBuf>,
+    /// With --against: how many rounds (each times both builds once).
+    #[arg(long, default_value_t = 6, requires = "against", value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub rounds: u32,
+    /// With --against: both builds at the same time, each pinned to a core of its own (swapped
+    /// every round), one thread each, instead of one after the other.
+    #[arg(long, requires = "against")]
+    pub together: bool,
 }
 
 /// The environment variable llvmpipe and lavapipe read for their rasterizer threads.
 const LP_NUM_THREADS: &str = "LP_NUM_THREADS";
 
 pub fn run(args: BenchArgs) -> Result<(), Failure> {
+    if let Some(other) = &args.against {
+        // What follows `bench` on the command line goes to both builds as it was typed.
+        let raw: Vec<std::ffi::OsString> = std::env::args_os()
+            .skip_while(|a| a != "bench")
+            .skip(1)
+            .collect();
+        return super::say(super::against::run(&args, other, &raw)?);
+    }
     let gpu = args.race || args.backend == Backend::Gpu;
     if args.adapter.is_some() && !gpu {
         return Err(Failure::bad_input(

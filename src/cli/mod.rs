@@ -7,6 +7,7 @@ use pelage::scene::Scene;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
+pub mod against;
 pub mod bench;
 pub mod compare;
 pub mod diagram;
