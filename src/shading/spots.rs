@@ -122,17 +122,40 @@ pub fn light_spot_surely_outside(normals: [Vec3; 3], direction: Vec3, below: f32
     if axis == glam::DVec3::ZERO {
         return false;
     }
-    let angle = |a: glam::DVec3, b: glam::DVec3| a.dot(b).clamp(-1.0, 1.0).acos();
-    let cone = unit.iter().map(|&n| angle(n, axis)).fold(0.0f64, f64::max);
-    if cone >= 80f64.to_radians() {
-        return false;
-    }
     let d = direction.as_dvec3().normalize_or_zero();
     if d == glam::DVec3::ZERO {
         return false;
     }
-    angle(axis, d) - cone >= f64::from(below).acos() + 1e-3
+    // The angles as cosines and sines, without a call to `acos` or `cos` (this runs once a
+    // triangle, layer and tile: five `acos` took 4 % of a frame of the default scene). The
+    // cone `β`: its cosine is the smallest of the normals' with the axis.
+    let cos_cone = unit
+        .iter()
+        .map(|n| n.dot(axis).clamp(-1.0, 1.0))
+        .fold(1.0f64, f64::min);
+    if cos_cone <= COS_80_DEGREES {
+        return false;
+    }
+    // `γ = acos(below) + 10⁻³`, by the sum of angles.
+    let below = f64::from(below);
+    let sin_below = (1.0 - below * below).max(0.0).sqrt();
+    let (cos_margin, sin_margin) = (MARGIN_RADIANS.cos(), MARGIN_RADIANS.sin());
+    let cos_gamma = below * cos_margin - sin_below * sin_margin;
+    let sin_gamma = sin_below * cos_margin + below * sin_margin;
+    // `β + γ` past π: no direction is that far from the axis. Else `∠(a, d) ≥ β + γ`, acos
+    // decreasing, is `a·d ≤ cos(β + γ)`.
+    if below < -cos_margin || cos_cone < -cos_gamma {
+        return false;
+    }
+    let sin_cone = (1.0 - cos_cone * cos_cone).max(0.0).sqrt();
+    axis.dot(d).clamp(-1.0, 1.0) <= cos_cone * cos_gamma - sin_cone * sin_gamma
 }
+
+/// `cos 80°`: a triangle whose normals spread wider is not tested.
+const COS_80_DEGREES: f64 = 0.173_648_177_666_930_41;
+
+/// The angle [`light_spot_surely_outside`] keeps from the spot's edge, far above rounding.
+const MARGIN_RADIANS: f64 = 1e-3;
 
 /// [`light_spot_lobe`] of `N` cosines, lane by lane the same bits (`pow01_lanes`).
 #[inline(always)]
@@ -447,6 +470,45 @@ mod tests {
         ));
         assert!(light_spot_surely_outside([-d, -d, -d], d, 0.97));
         assert!(!light_spot_surely_outside([-d, -d, -d], d, f32::NAN));
+    }
+
+    /// The test as it is written in angles (five `acos`, in `f64`): the cosine form must agree
+    /// with it wherever the two angles are not within rounding of each other.
+    fn surely_outside_by_angles(normals: [Vec3; 3], direction: Vec3, below: f32) -> Option<bool> {
+        let unit = normals.map(|n| n.as_dvec3().normalize());
+        let axis = (unit[0] + unit[1] + unit[2]).normalize();
+        let angle = |a: glam::DVec3, b: glam::DVec3| a.dot(b).clamp(-1.0, 1.0).acos();
+        let cone = unit.iter().map(|&n| angle(n, axis)).fold(0.0f64, f64::max);
+        if cone >= 80f64.to_radians() {
+            return Some(false);
+        }
+        let slack =
+            angle(axis, direction.as_dvec3().normalize()) - cone - (f64::from(below).acos() + 1e-3);
+        (slack.abs() > 1e-9).then_some(slack >= 0.0)
+    }
+
+    #[test]
+    fn light_spot_surely_outside_is_the_test_in_angles() {
+        let mut rng = Lcg::new(79);
+        let (mut outside, mut inside) = (0, 0);
+        for k in 0..20_000 {
+            let direction = rng.cube().normalize_or(Vec3::Y);
+            let below = [0.97, 0.5, 0.0, -0.3, -0.9, 0.999][k % 6];
+            let centre = rng.cube().normalize_or(Vec3::X);
+            let spread = [0.02, 0.2, 0.6, 1.5][k % 4];
+            let normals = [0, 1, 2].map(|_| (centre + rng.cube() * spread).normalize_or(Vec3::X));
+            let Some(want) = surely_outside_by_angles(normals, direction, below) else {
+                continue;
+            };
+            let got = light_spot_surely_outside(normals, direction, below);
+            assert_eq!(got, want, "{normals:?} {direction:?} {below}");
+            if got {
+                outside += 1;
+            } else {
+                inside += 1;
+            }
+        }
+        assert!(outside > 3000 && inside > 3000, "{outside} {inside}");
     }
 
     #[test]
