@@ -1184,8 +1184,10 @@ pub struct FurBatch<'a, const N: usize> {
     charred: u32,
     /// Each charred lane's factor on the strand colour.
     char_factor: [f32; N],
-    /// The triangle (corner addresses) `spots_missed` was found for.
+    /// The triangle (corner addresses) of the last batch with spots.
     spots_triangle: Option<[usize; 3]>,
+    /// Whether `spots_missed` was found for that triangle (at its second batch), else 0.
+    spots_tested: bool,
     /// Bit `s`: spot `s` surely misses that triangle ([`Spot::surely_misses`]), its weight 0
     /// on every lane of it.
     spots_missed: u64,
@@ -1290,6 +1292,7 @@ impl<const N: usize> Default for FurBatch<'_, N> {
             charred: 0,
             char_factor: [0.0; N],
             spots_triangle: None,
+            spots_tested: false,
             spots_missed: 0,
         }
     }
@@ -1746,9 +1749,19 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         if !p.spots.is_empty() {
             // Spots that surely miss the batch's triangle give every lane the weight 0 without
             // their arithmetic (found once a triangle), and where all do, the lanes' points and
-            // normals are not interpolated.
-            if self.spots_triangle != Some(varyings.triangle) {
+            // normals are not interpolated. The test costs about what the spots' arithmetic
+            // on half a batch does, so a triangle's first batch with fewer lanes (a small
+            // triangle's, whose lanes rarely fill a second) computes every spot instead, their
+            // weights 0 where the test would have skipped them (the same bits); the test then
+            // runs at the triangle's next batch, if any.
+            let new_triangle = self.spots_triangle != Some(varyings.triangle);
+            if new_triangle {
                 self.spots_triangle = Some(varyings.triangle);
+                self.spots_tested = false;
+                self.spots_missed = 0;
+            }
+            if !self.spots_tested && (len >= N / 2 || !new_triangle) {
+                self.spots_tested = true;
                 let corner = |c: usize| {
                     varyings
                         .corners
