@@ -130,6 +130,7 @@ pub(super) fn avx2_available() -> bool {
 /// [`nearest`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 pub(super) unsafe fn nearest_avx2<const N: usize>(
     u: &[f32; N],
     v: &[f32; N],
