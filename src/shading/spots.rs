@@ -429,20 +429,27 @@ mod tests {
         (corners[0] * w[0] + corners[1] * w[1]) + corners[2] * w[2]
     }
 
+    /// A light spot's test case: vertex normals in a cone of about `spread` radians around a
+    /// random centre (not unit, as interpolated normals are not), a random unit direction,
+    /// and `below`.
+    fn light_spot_case(rng: &mut Lcg, below: f32, spread: f32) -> ([Vec3; 3], Vec3, f32) {
+        let direction = rng.cube().normalize_or(Vec3::Y);
+        let centre = rng.cube().normalize_or(Vec3::X);
+        let normals = [0, 1, 2]
+            .map(|_| (centre + rng.cube() * spread).normalize_or(Vec3::X) * rng.range(0.5, 2.0));
+        (normals, direction, below)
+    }
+
     #[test]
     fn a_triangle_surely_outside_a_light_spot_has_every_cosine_below() {
         let mut rng = Lcg::new(78);
         let (mut outside, mut unsure) = (0, 0);
         for k in 0..4000 {
-            let direction = rng.cube().normalize_or(Vec3::Y);
-            let below = [0.97, 0.5, 0.0, -0.3][k % 4];
-            // Vertex normals in a cone of a few degrees to a few tens, at various angles from
-            // the direction; not unit, as interpolated normals are not.
-            let centre = rng.cube().normalize_or(Vec3::X);
-            let spread = [0.02, 0.2, 0.6][k % 3];
-            let normals = [0, 1, 2].map(|_| {
-                (centre + rng.cube() * spread).normalize_or(Vec3::X) * rng.range(0.5, 2.0)
-            });
+            let (normals, direction, below) = light_spot_case(
+                &mut rng,
+                [0.97, 0.5, 0.0, -0.3][k % 4],
+                [0.02, 0.2, 0.6][k % 3],
+            );
             if !light_spot_surely_outside(normals, direction, below) {
                 unsure += 1;
                 continue;
@@ -492,11 +499,9 @@ mod tests {
         let mut rng = Lcg::new(79);
         let (mut outside, mut inside) = (0, 0);
         for k in 0..20_000 {
-            let direction = rng.cube().normalize_or(Vec3::Y);
             let below = [0.97, 0.5, 0.0, -0.3, -0.9, 0.999][k % 6];
-            let centre = rng.cube().normalize_or(Vec3::X);
-            let spread = [0.02, 0.2, 0.6, 1.5][k % 4];
-            let normals = [0, 1, 2].map(|_| (centre + rng.cube() * spread).normalize_or(Vec3::X));
+            let (normals, direction, below) =
+                light_spot_case(&mut rng, below, [0.02, 0.2, 0.6, 1.5][k % 4]);
             let Some(want) = surely_outside_by_angles(normals, direction, below) else {
                 continue;
             };
