@@ -1186,7 +1186,8 @@ pub struct FurBatch<'a, const N: usize> {
     char_factor: [f32; N],
     /// The triangle (corner addresses) of the last batch with spots.
     spots_triangle: Option<[usize; 3]>,
-    /// Whether `spots_missed` was found for that triangle (at its second batch), else 0.
+    /// Whether `spots_missed` was found for that triangle (at its first batch of at least
+    /// half the lanes, else at its next); until then `spots_missed` is 0.
     spots_tested: bool,
     /// Bit `s`: spot `s` surely misses that triangle ([`Spot::surely_misses`]), its weight 0
     /// on every lane of it.
