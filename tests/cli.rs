@@ -380,6 +380,25 @@ fn bench_against_refuses_what_it_cannot_compare() {
         "one thread",
     );
     refused(&["bench", "--against", me, "--rounds", "0"], "--rounds");
+    // A build that fails is named, in turn and together (where the machine has /bin/false).
+    if Path::new("/bin/false").is_file() {
+        for together in [false, true] {
+            let mut args = vec!["bench", "--against", "/bin/false", "--rounds", "1"];
+            args.extend(["--width", "32", "--height", "32", "--frames", "1"]);
+            if together {
+                args.push("--together");
+            }
+            let o = pelage(&args);
+            let err = stderr(&o);
+            assert_ne!(o.status.code(), Some(0), "{args:?}: {err}");
+            let named = err.contains("/bin/false bench failed");
+            assert!(
+                named || (together && err.contains("two cores")),
+                "{args:?}: {err}"
+            );
+            assert!(!err.contains("panicked"), "{err}");
+        }
+    }
 }
 
 #[test]

@@ -61,18 +61,25 @@ pub fn run(args: &BenchArgs, other: &Path, raw: &[OsString]) -> Result<String, F
                 } else {
                     (cores[0], cores[1])
                 };
-                let children = [
-                    pinning::spawn_on(a, bench_command(builds[0], &passed))
-                        .map_err(|e| spawn_failure(builds[0], e))?,
-                    pinning::spawn_on(b, bench_command(builds[1], &passed))
-                        .map_err(|e| spawn_failure(builds[1], e))?,
-                ];
-                let [first, second] = children;
-                let first = finish(builds[0], first)?;
-                bar.inc(1);
-                let second = finish(builds[1], second)?;
-                bar.inc(1);
-                [first, second]
+                let mut first = pinning::spawn_on(a, bench_command(builds[0], &passed))
+                    .map_err(|e| spawn_failure(builds[0], e))?;
+                let second = match pinning::spawn_on(b, bench_command(builds[1], &passed)) {
+                    Ok(child) => child,
+                    Err(e) => {
+                        // Not left running behind the error.
+                        let _ = first.kill();
+                        let _ = first.wait();
+                        return Err(spawn_failure(builds[1], e));
+                    }
+                };
+                // Both waited for before either report is read, so that a failure leaves
+                // no build running.
+                let (first, second) = (wait(builds[0], first), wait(builds[1], second));
+                bar.inc(2);
+                [
+                    BuildReport::from_output(builds[0], &first?)?,
+                    BuildReport::from_output(builds[1], &second?)?,
+                ]
             }
             None => {
                 let order = if swap { [1, 0] } else { [0, 1] };
@@ -146,12 +153,16 @@ fn spawn_failure(build: &Path, error: std::io::Error) -> Failure {
     Failure::bad_input(format!("cannot run {}: {error}", build.display()))
 }
 
+/// Waits for a build's `bench` and takes its output.
+fn wait(build: &Path, child: Child) -> Result<Output, Failure> {
+    child
+        .wait_with_output()
+        .map_err(|e| Failure::other(format!("waiting for {}: {e}", build.display())))
+}
+
 /// Waits for a build's `bench` and reads its report.
 fn finish(build: &Path, child: Child) -> Result<BuildReport, Failure> {
-    let output = child
-        .wait_with_output()
-        .map_err(|e| Failure::other(format!("waiting for {}: {e}", build.display())))?;
-    BuildReport::from_output(build, &output)
+    BuildReport::from_output(build, &wait(build, child)?)
 }
 
 /// What the comparison reads of one build's `bench --json`.
