@@ -1145,6 +1145,18 @@ fn entry_test_needed(textures: &LayerMaps<'_>, maps: &SurfaceMaps, p: &ShadePara
 /// plain per-lane loops turn into pairs of 256-bit instructions or single 512-bit ones.
 pub const BATCH_LANES: usize = crate::simd::LANES;
 
+/// The width of the stage that runs a wider batch holding at most this many lanes
+/// ([`FurBatch::run`]); one of at most [`SMALLEST_LANES`] runs on a stage that wide.
+const NARROW_LANES: usize = crate::simd::LANES;
+
+/// The narrowest stage: one quad's lanes.
+const SMALLEST_LANES: usize = 4;
+
+/// The lanes from which a triangle's first batch tests which spots surely miss it
+/// ([`Spot::surely_misses`], about 380 instructions in f64) rather than computing every spot
+/// on its lanes: the test costs about what the spots' arithmetic on this many lanes does.
+const SPOTS_TEST_LANES: usize = 8;
+
 /// Shaded fragments of a draw's quads in one tile waiting for the whole fur stage, which runs
 /// on `N` lanes at once ([`BATCH_LANES`], or [`crate::simd::WIDE_LANES`] at AVX2 and AVX-512)
 /// in structure-of-arrays form: the texture pair's footprints, texel conversion and filter
@@ -1537,13 +1549,69 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         if self.len == 0 {
             return;
         }
-        let shaded = shade_batch_at_level(self, textures, maps, layer, p);
+        // A batch holding at most half its lanes (a small triangle's, or a triangle's last
+        // lanes in a tile) runs on a narrower stage, one quad wide where it holds one quad: a
+        // lane's result never depends on the batch's width, and the stage's cost grows with
+        // its width, not with the lanes held.
+        let shaded = if N > SMALLEST_LANES && self.len <= SMALLEST_LANES {
+            self.shade_narrow::<SMALLEST_LANES>(textures, maps, layer, p)
+        } else if N > NARROW_LANES && self.len <= NARROW_LANES {
+            self.shade_narrow::<NARROW_LANES>(textures, maps, layer, p)
+        } else {
+            shade_batch_at_level(self, textures, maps, layer, p)
+        };
         for (i, slot) in self.slots.iter_mut().enumerate() {
             if let Some(slot) = slot.take()
                 && shaded.kept & (1 << i) != 0
             {
                 write(slot, shaded.colours[i]);
             }
+        }
+    }
+
+    /// [`FurBatch::run`]'s stage of the lanes held (at most `M` of them, `M` below `N`) by a
+    /// batch `M` lanes wide: the same lanes, the same bits, the stage's work on `M` lanes.
+    /// The batch holds no lane after; what it keeps of the spots' test carries over.
+    fn shade_narrow<const M: usize>(
+        &mut self,
+        textures: LayerMaps<'a>,
+        maps: &SurfaceMaps,
+        layer: &LayerParams,
+        p: &ShadeParams,
+    ) -> BatchColours<N> {
+        debug_assert!(M < N && self.len <= M);
+        let first = |lanes: &[f32; N]| -> [f32; M] { std::array::from_fn(|i| lanes[i]) };
+        let mut narrow = FurBatch::<'a, M> {
+            len: self.len,
+            pending: PendingQuads::default(),
+            pair_lower: self.pair_lower,
+            pair: self.pair,
+            shadow_level: self.shadow_level,
+            shadow_index: self.shadow_index,
+            slots: [const { None }; M],
+            varyings: BatchVaryings {
+                triangle: self.varyings.triangle,
+                corners: self.varyings.corners,
+                weights: self.varyings.weights.each_ref().map(first),
+            },
+            footprint: first(&self.footprint),
+            charred: self.charred,
+            char_factor: first(&self.char_factor),
+            spots_triangle: self.spots_triangle,
+            spots_tested: self.spots_tested,
+            spots_missed: self.spots_missed,
+        };
+        self.len = 0;
+        self.charred = 0;
+        let shaded = shade_batch_at_level(&mut narrow, textures, maps, layer, p);
+        self.spots_triangle = narrow.spots_triangle;
+        self.spots_tested = narrow.spots_tested;
+        self.spots_missed = narrow.spots_missed;
+        let mut colours = [Vec4::ZERO; N];
+        colours[..M].copy_from_slice(&shaded.colours);
+        BatchColours {
+            kept: shaded.kept,
+            colours,
         }
     }
 
@@ -1751,17 +1819,18 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             // Spots that surely miss the batch's triangle give every lane the weight 0 without
             // their arithmetic (found once a triangle), and where all do, the lanes' points and
             // normals are not interpolated. The test costs about what the spots' arithmetic
-            // on half a batch does, so a triangle's first batch with fewer lanes (a small
-            // triangle's, whose lanes rarely fill a second) computes every spot instead, their
-            // weights 0 where the test would have skipped them (the same bits); the test then
-            // runs at the triangle's next batch, if any.
+            // on a batch of `SPOTS_TEST_LANES` does, so a triangle's first batch with no more
+            // lanes (a small triangle's, whose lanes rarely fill a second, run by a narrow
+            // stage) computes every spot instead, their weights 0 where the test would have
+            // skipped them (the same bits); the test then runs at the triangle's next batch,
+            // if any.
             let new_triangle = self.spots_triangle != Some(varyings.triangle);
             if new_triangle {
                 self.spots_triangle = Some(varyings.triangle);
                 self.spots_tested = false;
                 self.spots_missed = 0;
             }
-            if !self.spots_tested && (len >= N / 2 || !new_triangle) {
+            if !self.spots_tested && (len > SPOTS_TEST_LANES || !new_triangle) {
                 self.spots_tested = true;
                 let corner = |c: usize| {
                     varyings
