@@ -380,7 +380,11 @@ impl Spot {
                 outside_below,
                 cosine_direction,
                 ..
-            } => shading::light_spot_surely_outside(normals, cosine_direction, outside_below),
+            } => super::light_spot_memo::light_spot_surely_outside(
+                normals,
+                cosine_direction,
+                outside_below,
+            ),
             _ => false,
         }
     }

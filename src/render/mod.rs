@@ -13,6 +13,7 @@
 //! - All texture reads of one fragment use the level of detail of the fur uv's derivatives.
 
 pub mod fragment;
+mod light_spot_memo;
 pub mod maps;
 
 use crate::camera::Camera;
