@@ -1200,14 +1200,20 @@ pub struct FurBatch<'a, const N: usize> {
     charred: u32,
     /// Each charred lane's factor on the strand colour.
     char_factor: [f32; N],
-    /// The triangle (corner addresses) of the last batch with spots.
-    spots_triangle: Option<[usize; 3]>,
-    /// Whether `spots_missed` was found for that triangle (at its first batch of at least
-    /// half the lanes, else at its next); until then `spots_missed` is 0.
-    spots_tested: bool,
-    /// Bit `s`: spot `s` surely misses that triangle ([`Spot::surely_misses`]), its weight 0
-    /// on every lane of it.
-    spots_missed: u64,
+    /// Which spots surely miss the triangle of the last batch with spots.
+    spots: SpotsMissed,
+}
+
+/// Which spots surely miss a batch's triangle ([`Spot::surely_misses`]), found once a triangle.
+#[derive(Clone, Copy, Default)]
+struct SpotsMissed {
+    /// The triangle (corner addresses).
+    triangle: Option<[usize; 3]>,
+    /// Whether `missed` was found for that triangle (at its first batch of more than
+    /// [`SPOTS_TEST_LANES`] lanes, else at its next); until then `missed` is 0.
+    tested: bool,
+    /// Bit `s`: spot `s` surely misses that triangle, its weight 0 on every lane of it.
+    missed: u64,
 }
 
 /// Quads of one triangle held for step 1 of the fur stage ([`FurBatch::hold`]): up to `N/4`
@@ -1308,9 +1314,7 @@ impl<const N: usize> Default for FurBatch<'_, N> {
             footprint: [0.0; N],
             charred: 0,
             char_factor: [0.0; N],
-            spots_triangle: None,
-            spots_tested: false,
-            spots_missed: 0,
+            spots: SpotsMissed::default(),
         }
     }
 }
@@ -1601,16 +1605,12 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             footprint: first(&self.footprint),
             charred: self.charred,
             char_factor: first(&self.char_factor),
-            spots_triangle: self.spots_triangle,
-            spots_tested: self.spots_tested,
-            spots_missed: self.spots_missed,
+            spots: self.spots,
         };
         self.len = 0;
         self.charred = 0;
         let shaded = shade_batch_at_level(&mut narrow, textures, maps, layer, p);
-        self.spots_triangle = narrow.spots_triangle;
-        self.spots_tested = narrow.spots_tested;
-        self.spots_missed = narrow.spots_missed;
+        self.spots = narrow.spots;
         let mut colours = [Vec4::ZERO; N];
         colours[..M].copy_from_slice(&shaded.colours);
         BatchColours {
@@ -1828,26 +1828,27 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             // stage) computes every spot instead, their weights 0 where the test would have
             // skipped them (the same bits); the test then runs at the triangle's next batch,
             // if any.
-            let new_triangle = self.spots_triangle != Some(varyings.triangle);
+            let new_triangle = self.spots.triangle != Some(varyings.triangle);
             if new_triangle {
-                self.spots_triangle = Some(varyings.triangle);
-                self.spots_tested = false;
-                self.spots_missed = 0;
+                self.spots = SpotsMissed {
+                    triangle: Some(varyings.triangle),
+                    ..SpotsMissed::default()
+                };
             }
-            if !self.spots_tested && (len > SPOTS_TEST_LANES || !new_triangle) {
-                self.spots_tested = true;
+            if !self.spots.tested && (len > SPOTS_TEST_LANES || !new_triangle) {
+                self.spots.tested = true;
                 let corner = |c: usize| {
                     varyings
                         .corners
                         .map(|v| Vec3::new(v[c], v[c + 1], v[c + 2]))
                 };
                 let (object, normals) = (corner(OBJECT), corner(NORMAL));
-                self.spots_missed = p.spots.iter().enumerate().fold(0, |missed, (s, spot)| {
+                self.spots.missed = p.spots.iter().enumerate().fold(0, |missed, (s, spot)| {
                     let misses = s < 64 && spot.surely_misses(object, normals);
                     missed | (u64::from(misses) << (s % 64))
                 });
             }
-            let missed = self.spots_missed;
+            let missed = self.spots.missed;
             let some_hit = (0..p.spots.len()).any(|s| s >= 64 || missed & (1 << s) == 0);
             let (object, unit_normals) = if some_hit {
                 let object = varyings.vec3(OBJECT);
