@@ -16,7 +16,8 @@
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
 //! it finds each quad's level of detail and mip levels once and hands the quad's shaded lanes
 //! to a [`FurBatch`], which runs every step above on [`BATCH_LANES`] lanes of the tile's quads
-//! (16 in the AVX2 and AVX-512 copies of the hot path, [`crate::simd`]) at once in structure-of-arrays
+//! (16 in the AVX2 and AVX-512 copies of the hot path, [`crate::simd`]; a batch holding at most
+//! 8 or 4 lanes runs the stage that wide) at once in structure-of-arrays
 //! form (the texture pair's footprints with [`TrilinearPair::sample_lanes`], the alpha test as
 //! a lane mask, [`shading::ShadowLanes`] for step 6, lookup `k` of every lane in one batch;
 //! [`crate::shading::lanes`] for the rest). The golden tests render every scene with both.
