@@ -510,4 +510,16 @@ mod tests {
         let round = Round::new(report(100.0, 80.0), report(150.0, 100.0));
         assert_eq!((round.median_cpu_ratio, round.min_cpu_ratio), (1.5, 1.25));
     }
+
+    #[test]
+    fn reports_read_back_every_bit_of_what_they_wrote() {
+        // A ratio printed by one build is read by the next (and by tests) as the same f64:
+        // serde_json's default parser is off by one unit in the last place for about one
+        // shortest-form number in seven, e.g. this one.
+        let ratio = f64::from_bits(0x3ff0_0001_091f_1668);
+        let text = serde_json::to_string(&ratio).expect("a finite number");
+        assert_eq!(text, "1.0000009876543121");
+        let read: f64 = serde_json::from_str(&text).expect("a number");
+        assert_eq!(read.to_bits(), ratio.to_bits());
+    }
 }
