@@ -512,6 +512,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(unix)]
     fn reports_read_back_every_bit_of_what_they_wrote() {
         // A ratio printed by one build is read by the next (and by tests) as the same f64:
         // serde_json's default parser is off by one unit in the last place for about one
@@ -521,5 +522,12 @@ mod tests {
         assert_eq!(text, "1.0000009876543121");
         let read: f64 = serde_json::from_str(&text).expect("a number");
         assert_eq!(read.to_bits(), ratio.to_bits());
+        // And through the path that reads another build's report.
+        let report =
+            format!(r#"{{"median_cpu_ms":{text},"min_cpu_ms":{text},"median_frame_ms":{text}}}"#);
+        let read = BuildReport::from_output(Path::new("/opt/old/pelage"), &output(0, &report, ""))
+            .ok()
+            .map(|r| [r.median_cpu_ms, r.min_cpu_ms, r.median_frame_ms].map(f64::to_bits));
+        assert_eq!(read, Some([ratio.to_bits(); 3]));
     }
 }
