@@ -583,10 +583,21 @@ fn map_address(i: i32, size: i32, wrap: u32) -> i32 {
     return clamp(i, 0, size - 1);
 }
 
+// A texel as its bytes (0–255): textureLoad of an RGBA8 texture gives byte/255.
+fn texel_bytes(map: texture_2d<f32>, at: vec2<i32>) -> vec4<f32> {
+    return round(textureLoad(map, at, 0) * 255.0);
+}
+
+// unorm8_exact: a filtered byte value scaled once, x·257/2^16 then y + y·(2^-16 + 2^-32).
+fn unorm8_scale(x: vec4<f32>) -> vec4<f32> {
+    let y = x * (257.0 / 65536.0);
+    return y + y * (1.0 / 65536.0 + 1.0 / 4294967296.0);
+}
+
 // SurfaceMaps::sample: bilinear at level 0 between the texel centres (i + ½)/size, with the
-// oracle's f32 weights (Sampler::bilinear_footprint and BilinearFootprint::filter), not the
-// GPU sampler's fixed-point ones: a map decides cuts (length) and which strands show
-// (density), so it is read as the oracle reads it.
+// oracle's f32 weights (Sampler::bilinear_footprint and BilinearFootprint::filter) on the
+// texels' bytes, scaled once, not the GPU sampler's fixed-point ones: a map decides cuts
+// (length) and which strands show (density), so it is read as the oracle reads it.
 fn sample_map(map: texture_2d<f32>, uv: vec2<f32>) -> vec4<f32> {
     let size = vec2<i32>(textureDimensions(map, 0u));
     let x = uv.x * f32(size.x) - 0.5;
@@ -599,13 +610,13 @@ fn sample_map(map: texture_2d<f32>, uv: vec2<f32>) -> vec4<f32> {
     let xb = map_address(i32(xf) + 1, size.x, frame.maps.y);
     let ya = map_address(i32(yf), size.y, frame.maps.z);
     let yb = map_address(i32(yf) + 1, size.y, frame.maps.z);
-    let t00 = textureLoad(map, vec2<i32>(xa, ya), 0);
-    let t10 = textureLoad(map, vec2<i32>(xb, ya), 0);
-    let t01 = textureLoad(map, vec2<i32>(xa, yb), 0);
-    let t11 = textureLoad(map, vec2<i32>(xb, yb), 0);
+    let t00 = texel_bytes(map, vec2<i32>(xa, ya));
+    let t10 = texel_bytes(map, vec2<i32>(xb, ya));
+    let t01 = texel_bytes(map, vec2<i32>(xa, yb));
+    let t11 = texel_bytes(map, vec2<i32>(xb, yb));
     let top = t00 + (t10 - t00) * fx;
     let bottom = t01 + (t11 - t01) * fx;
-    return top + (bottom - top) * fy;
+    return unorm8_scale(top + (bottom - top) * fy);
 }
 
 // SurfaceMaps::length_at: the length map's red channel, 1 without one.
@@ -1205,8 +1216,9 @@ fn fs_fur(v: FurVaryings) -> @location(0) vec4<f32> {
     if (frame.lean.w != 0.0) {
         tangent = bend_tangent(tangent, v.lean, layer.height_fraction);
     }
-    let light = normalize_or_zero(v.light);
-    let eye = normalize_or_zero(v.eye);
+    // The interpolated light and eye, normalised once, by the lighting terms themselves.
+    let light = v.light;
+    let eye = v.eye;
     // 6. The shell self-shadow (3.2.2), displaced by the wind too; through the density bands.
     let shadow = shell_shadow(uv, v.shadow + v.wind_uv, layer.lookups, lod, density);
     if (debug == 3u) {

@@ -93,14 +93,15 @@ struct BilinearFootprint {
 
 impl BilinearFootprint {
     /// `top = t00 + (t10 − t00)·fx`, `bottom = t01 + (t11 − t01)·fx`,
-    /// `top + (bottom − top)·fy`.
+    /// `top + (bottom − top)·fy` on the texels' bytes as they are (0–255): the caller scales
+    /// the filtered value once ([`unorm8_scale_vec4`]).
     #[inline]
     fn filter(&self, level: &MipLevel) -> Vec4 {
         let [i00, i10, i01, i11] = self.texels;
-        let t00 = to_vec4(level.texels[i00]);
-        let t10 = to_vec4(level.texels[i10]);
-        let t01 = to_vec4(level.texels[i01]);
-        let t11 = to_vec4(level.texels[i11]);
+        let t00 = byte_values(level.texels[i00]);
+        let t10 = byte_values(level.texels[i10]);
+        let t01 = byte_values(level.texels[i01]);
+        let t11 = byte_values(level.texels[i11]);
         let top = t00 + (t10 - t00) * self.fx;
         let bottom = t01 + (t11 - t01) * self.fx;
         top + (bottom - top) * self.fy
@@ -124,7 +125,7 @@ impl BilinearFootprint {
             bytes[4..].copy_from_slice(&b);
             let mut t = [0.0f32; 8];
             for c in 0..8 {
-                t[c] = f32::from(bytes[c]) / 255.0;
+                t[c] = f32::from(bytes[c]);
             }
             t
         };
@@ -150,8 +151,7 @@ impl BilinearFootprint {
 
 impl BilinearFootprint {
     /// [`BilinearFootprint::filter_pair`] from interleaved texels ([`PairedTexels`]): the same
-    /// values (`byte/255` by [`unorm8_exact`]) and the same filter operations, so the same
-    /// bits, with one load a texel and no division.
+    /// bytes and the same filter operations, so the same bits, with one load a texel.
     ///
     /// # Safety
     /// This footprint's texel indices are of addressed rows and columns of a level of the
@@ -163,7 +163,7 @@ impl BilinearFootprint {
             let bytes = unsafe { level.get_unchecked(i).0 };
             let mut t = [0.0f32; 8];
             for c in 0..8 {
-                t[c] = unorm8_exact(f32::from(bytes[c]));
+                t[c] = f32::from(bytes[c]);
             }
             t
         };
@@ -177,13 +177,45 @@ impl BilinearFootprint {
 #[repr(C, align(8))]
 struct PairTexel([u8; 8]);
 
-/// `b/255` of a byte `b` given as a float, the correctly rounded quotient, without a division:
-/// `y = b·257/2^16` is exact, and `b/255 = y·(1 + 2^-16 + 2^-32 + …)`; `y + y·(2^-16 + 2^-32)`
-/// rounds to the quotient for every byte (test `unorm8_exact_is_the_quotient`).
+/// A filtered byte value `x` (0–255) scaled to 0–1, the one scaling of a texture sample
+/// (docs/conventions.md, "Textures"): `y = x·257/2^16`, then `y + y·(2^-16 + 2^-32)`, since
+/// `1/255 = (257/2^16)·(1 + 2^-16 + 2^-32 + …)`. For a whole byte `b` (a texel read alone, or
+/// four equal texels) it is the correctly rounded `b/255` (test `unorm8_exact_is_the_quotient`);
+/// between bytes, two roundings from `x/255`. No division.
 #[inline(always)]
-fn unorm8_exact(b: f32) -> f32 {
-    let y = b * UNORM8_SCALE;
+fn unorm8_exact(x: f32) -> f32 {
+    let y = x * UNORM8_SCALE;
     y + y * UNORM8_CORRECTION
+}
+
+/// [`unorm8_exact`] of four channels, the same operations per channel.
+#[inline(always)]
+fn unorm8_scale_vec4(x: Vec4) -> Vec4 {
+    let y = x * UNORM8_SCALE;
+    y + y * UNORM8_CORRECTION
+}
+
+/// [`unorm8_exact`] of eight channels.
+#[inline(always)]
+fn unorm8_scale_8(x: [f32; 8]) -> [f32; 8] {
+    let mut out = [0.0f32; 8];
+    for c in 0..8 {
+        out[c] = unorm8_exact(x[c]);
+    }
+    out
+}
+
+/// [`unorm8_exact`] of every lane of every channel, once the lanes' filtered bytes are in their
+/// channel arrays: a packed loop over each channel's lanes. (A lane's eight channels scaled
+/// before they are stored apart became scalar code, 32 instructions a lane.)
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
+fn scale_channels<const N: usize>(channels: &mut PairChannels<N>) {
+    for channel in channels.iter_mut() {
+        for i in 0..N {
+            channel[i] = unorm8_exact(channel[i]);
+        }
+    }
 }
 
 /// The factors of [`unorm8_exact`]: `257/2^16`, then `2^-16 + 2^-32`.
@@ -192,8 +224,8 @@ const UNORM8_CORRECTION: f32 = 1.0 / 65536.0 + 1.0 / 4_294_967_296.0;
 
 /// Two textures with one mip chain shape (a layer's colour and tangent maps), interleaved
 /// once: texel `i` of level `k` holds the first texture's RGBA bytes in 0–3 and the second's in
-/// 4–7, so that a texel read of both is one 8-byte load, widened, converted and turned into
-/// `byte/255` by `unorm8_exact` (no division) in 8 lanes at once (docs/performance.md,
+/// 4–7, so that a texel read of both is one 8-byte load, widened and converted in 8 lanes at
+/// once (docs/performance.md,
 /// "Texel pairs side by side"). Also each level's alpha bytes of the first texture alone, for
 /// the shadow's nearest lookups.
 #[derive(Clone, Debug, PartialEq)]
@@ -505,6 +537,17 @@ static UNORM8: [f32; 256] = {
     }
     table
 };
+
+/// The four bytes of a texel as floats (0–255), for the bilinear filter.
+#[inline]
+fn byte_values(t: [u8; 4]) -> Vec4 {
+    Vec4::new(
+        f32::from(t[0]),
+        f32::from(t[1]),
+        f32::from(t[2]),
+        f32::from(t[3]),
+    )
+}
 
 /// `byte / 255` per channel: one packed conversion and one packed division, the same IEEE
 /// quotient as the scalar `f32::from(byte) / 255.0` (a table of the 256 quotients needed four
@@ -857,13 +900,13 @@ impl TrilinearLevels<'_> {
     pub fn sample(&self, uv: Vec2) -> Vec4 {
         let [fa, fb] = self.footprints(uv);
         let a = fa.filter(self.levels[0]);
-        match self.blend {
+        unorm8_scale_vec4(match self.blend {
             None => a,
             Some(frac) => {
                 let b = fb.filter(self.levels[1]);
                 a + (b - a) * frac
             }
-        }
+        })
     }
 
     /// The four texels and the weights of a bilinear sample of each level: the x and y of
@@ -944,6 +987,7 @@ impl TrilinearPair<'_> {
                 both[c] = both[c] + (b[c] - both[c]) * frac;
             }
         }
+        let both = unorm8_scale_8(both);
         (Vec4::from_slice(&both[..4]), Vec4::from_slice(&both[4..]))
     }
 }
@@ -1013,6 +1057,7 @@ impl TrilinearPair<'_> {
                     out[c][i] = both[c];
                 }
             }
+            scale_channels(&mut out);
             return out;
         }
         for i in 0..N {
@@ -1031,6 +1076,7 @@ impl TrilinearPair<'_> {
                 out[c][i] = both[c];
             }
         }
+        scale_channels(&mut out);
         out
     }
 
@@ -1700,19 +1746,24 @@ mod tests {
         let k = lod.floor() as usize;
         let k1 = (k + 1).min(last);
         let frac = lod - k as f32;
+        // The texels' bytes filtered as they are, the result scaled once.
         let bilinear = |level: &MipLevel| {
             let (texels, fx, fy) = scalar_footprint(s, level, uv);
-            let t = texels.map(|i| to_vec4(level.texels[i]));
+            let t = texels.map(|i| Vec4::from_array(level.texels[i].map(f32::from)));
             let top = t[0] + (t[1] - t[0]) * fx;
             let bottom = t[2] + (t[3] - t[2]) * fx;
             top + (bottom - top) * fy
         };
+        let scale = |x: Vec4| {
+            let y = x * (257.0 / 65536.0);
+            y + y * (1.0 / 65536.0 + 1.0 / 4_294_967_296.0)
+        };
         let a = bilinear(&texture.levels[k]);
         if frac == 0.0 || k1 == k {
-            return a;
+            return scale(a);
         }
         let b = bilinear(&texture.levels[k1]);
-        a + (b - a) * frac
+        scale(a + (b - a) * frac)
     }
 
     /// A `w`×`h` texture of hashed texels: channel `c` of texel `i` is the byte of

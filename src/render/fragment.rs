@@ -926,8 +926,8 @@ pub fn shade_fur(
             let lighting = shading::strand_lighting(
                 lit.tangent(&v.lit, layer, p),
                 Vec3::Z,
-                v.lit.light.normalize_or_zero(),
-                v.lit.eye.normalize_or_zero(),
+                v.lit.light,
+                v.lit.eye,
                 p.exponents,
                 p.tangents,
                 p.tangent_shift,
@@ -1883,13 +1883,15 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         };
         let wind = varyings.vec3(WIND);
         let lean = varyings.vec3(LEAN);
+        // The interpolated light and eye go to the lighting as they are: it normalises them
+        // (docs/conventions.md, "Lighting inputs").
         let light = varyings.vec3(LIGHT);
         let eye = varyings.vec3(EYE);
         let lighting = shading::strand_lighting_lanes(
             &lit_tangents_lanes(&encoded_tangent, &wind, &lean, layer, p),
             &Vec3xN::splat(Vec3::Z),
-            &light.normalize_or_zero(),
-            &eye.normalize_or_zero(),
+            &light,
+            &eye,
             p.exponents,
             p.tangents,
             p.tangent_shift,

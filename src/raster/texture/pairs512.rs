@@ -12,9 +12,9 @@
 //! took the same CPU as the AVX2 level's 8; with it, 14–15 % less.
 //!
 //! The same bits as [`super::BilinearFootprint::filter_converted`] and the per-lane blend of
-//! `sample_lanes`: per channel, the same IEEE operations in the same order (`unorm8_exact`'s
-//! multiply, multiply, add; the filter's subtract, multiply, add; the blend where a lane's
-//! fraction is not 0), with no fused multiply-add (each intrinsic is one correctly rounded
+//! `sample_lanes`: per channel, the same IEEE operations in the same order (the filter's
+//! subtract, multiply, add on the bytes; the blend where a lane's fraction is not 0;
+//! `unorm8_exact`'s multiply, multiply, add once at the end), with no fused multiply-add (each intrinsic is one correctly rounded
 //! operation, and Rust never contracts them).
 
 // Only x86-64 has this path; elsewhere `available` is false and the rest goes unused.
@@ -151,7 +151,7 @@ pub(super) unsafe fn sample<const N: usize>(
         _mm512_set1_ps(UNORM8_SCALE),
         _mm512_set1_ps(UNORM8_CORRECTION),
     );
-    // Texel `index[a]` of lane a in channels 0–7 and `index[b]` of lane b in 8–15, `byte/255`.
+    // Texel `index[a]` of lane a in channels 0–7 and `index[b]` of lane b in 8–15, as bytes.
     let texels = |level: &[PairTexel], a: usize, b: usize| -> __m512 {
         // SAFETY: the function's contract puts both indices within `level`; a `PairTexel` is
         // 8 bytes, read unaligned.
@@ -161,8 +161,7 @@ pub(super) unsafe fn sample<const N: usize>(
                 _mm_castsi128_pd(first),
                 level.as_ptr().add(b).cast(),
             ));
-            let y = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_cvtepu8_epi32(both)), scale);
-            _mm512_add_ps(y, _mm512_mul_ps(y, correction))
+            _mm512_cvtepi32_ps(_mm512_cvtepu8_epi32(both))
         }
     };
     // Lane a's value in channels 0–7, lane b's in 8–15.
@@ -200,8 +199,11 @@ pub(super) unsafe fn sample<const N: usize>(
     });
     let mut out = [[0.0f32; N]; 8];
     for (c, channel) in channels.into_iter().enumerate() {
+        // `unorm8_exact` of the filtered bytes: the one scaling, after the blend.
+        let y = _mm512_mul_ps(channel, scale);
+        let scaled = _mm512_add_ps(y, _mm512_mul_ps(y, correction));
         // SAFETY: `N` is 16: one register fills the channel's array.
-        unsafe { _mm512_storeu_ps(out[c].as_mut_ptr(), channel) };
+        unsafe { _mm512_storeu_ps(out[c].as_mut_ptr(), scaled) };
     }
     out
 }
