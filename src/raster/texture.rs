@@ -554,12 +554,7 @@ fn byte_values(t: [u8; 4]) -> Vec4 {
 /// lookups and inserts per texel).
 #[inline]
 fn to_vec4(t: [u8; 4]) -> Vec4 {
-    Vec4::new(
-        f32::from(t[0]),
-        f32::from(t[1]),
-        f32::from(t[2]),
-        f32::from(t[3]),
-    ) / 255.0
+    byte_values(t) / 255.0
 }
 
 #[inline]
