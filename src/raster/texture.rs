@@ -225,9 +225,8 @@ const UNORM8_CORRECTION: f32 = 1.0 / 65536.0 + 1.0 / 4_294_967_296.0;
 /// Two textures with one mip chain shape (a layer's colour and tangent maps), interleaved
 /// once: texel `i` of level `k` holds the first texture's RGBA bytes in 0–3 and the second's in
 /// 4–7, so that a texel read of both is one 8-byte load, widened and converted in 8 lanes at
-/// once (docs/performance.md,
-/// "Texel pairs side by side"). Also each level's alpha bytes of the first texture alone, for
-/// the shadow's nearest lookups.
+/// once (docs/performance.md, "Texel pairs side by side"). Also each level's alpha bytes of the
+/// first texture alone, for the shadow's nearest lookups.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairedTexels {
     /// Each level's texel count (its width × height, as in both textures) and its texels.

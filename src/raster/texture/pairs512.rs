@@ -14,8 +14,8 @@
 //! The same bits as [`super::BilinearFootprint::filter_converted`] and the per-lane blend of
 //! `sample_lanes`: per channel, the same IEEE operations in the same order (the filter's
 //! subtract, multiply, add on the bytes; the blend where a lane's fraction is not 0;
-//! `unorm8_exact`'s multiply, multiply, add once at the end), with no fused multiply-add (each intrinsic is one correctly rounded
-//! operation, and Rust never contracts them).
+//! `unorm8_exact`'s multiply, multiply, add once at the end), with no fused multiply-add
+//! (each intrinsic is one correctly rounded operation, and Rust never contracts them).
 
 // Only x86-64 has this path; elsewhere `available` is false and the rest goes unused.
 #![cfg_attr(not(target_arch = "x86_64"), allow(dead_code, unused_imports))]
