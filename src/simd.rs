@@ -11,18 +11,22 @@
 //! where inlined it was copied at every call site of every fixed-function copy of the quad
 //! loop. The body stays ordinary Rust; only the instruction selection differs (VEX or EVEX
 //! encoding, three-operand forms, `blendv` or mask registers for selects, BMI shifts) and, at
-//! AVX2 and AVX-512, the batch width: the kernel runs with [`WIDE_LANES`] (16) lanes a batch
-//! instead of the baseline's [`LANES`] (8), one 512-bit register of `f32` per lane array at
-//! AVX-512 and two 256-bit ones at AVX2.
+//! AVX2 and AVX-512, the batch width: the kernel runs with [`AVX2_LANES`] (32) lanes a batch at
+//! AVX2, four 256-bit registers of `f32` per lane array, and [`WIDE_LANES`] (16) at AVX-512, one
+//! 512-bit register, instead of the baseline's [`LANES`] (8).
 //!
-//! Why 16 lanes at AVX2 too. A batch has work that does not grow with its lanes (its set-up,
-//! the spots' test once a triangle, the call and the write-back) and its steps are one chain of
-//! dependent vector operations (texels, alpha test, shadow, tangent, lighting, eq. 3.7): with 16
-//! lanes the fixed work is paid once for 16 lanes and every step is two independent 256-bit
-//! operations. On the AMD EPYC (Zen 3) machine the batch's instructions fell from 367 to 309 a
-//! fragment and the frame's CPU by about 4 % (docs/performance.md, "Batches of 16 lanes at AVX2
-//! (AMD EPYC)"). While the stage was still inlined into the quad loop's copies, 16 AVX2 lanes
-//! had taken 41 % more CPU.
+//! Why 32 lanes at AVX2. A batch has work that does not grow with its lanes (its set-up, the
+//! spots' test once a triangle, the call and the write-back) and its steps are one chain of
+//! dependent vector operations (texels, alpha test, shadow, tangent, lighting, eq. 3.7): with
+//! more lanes the fixed work is paid once for more of them and every step is several
+//! independent 256-bit operations, which the core overlaps. On the AMD EPYC (Zen 3) machine 16
+//! lanes took the batch's instructions from 367 to 309 a fragment and the frame's CPU down by
+//! about 4 % against 8 (docs/performance.md, "Batches of 16 lanes at AVX2 (AMD EPYC)"); 32 lanes
+//! took about 5 % less CPU than 16 for 2 % fewer instructions: the four chains a step hide the
+//! latencies that two left exposed (docs/performance.md, "Batches of 32 lanes at AVX2 (AMD
+//! EPYC)"). A batch holding at most 16 lanes runs the 16-lane stage (`FurBatch::run`). While
+//! the stage was still inlined into the quad loop's copies, 16 AVX2 lanes had taken 41 % more
+//! CPU.
 //!
 //! The AVX-512 level, and why 16 lanes pay now. An earlier AVX-512 copy took 24 % more CPU than
 //! the baseline with 4-lane quads, then the same as AVX2 with 8-lane batches and 7–10 % more
@@ -186,9 +190,13 @@ impl std::str::FromStr for SimdLevel {
 /// quads, two 128-bit registers of `f32`.
 pub const LANES: usize = 8;
 
-/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx2`] and [`SimdLevel::Avx512`]:
-/// four quads, two 256-bit registers of `f32` or one 512-bit register.
+/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx512`] (and on the baseline where
+/// [`BATCH_LANES_ENV`] asks): four quads, one 512-bit register of `f32`.
 pub const WIDE_LANES: usize = 16;
+
+/// Lanes of the batches a [`Kernel`] runs at [`SimdLevel::Avx2`]: eight quads, four 256-bit
+/// registers of `f32`. At most 32, the bits of a batch's lane masks.
+pub const AVX2_LANES: usize = 32;
 
 /// A piece of hot code compiled once per level: its [`Kernel::run`] must be `#[inline(always)]`,
 /// as must everything hot it calls (or be generic and small enough that LLVM inlines it), so
@@ -196,15 +204,15 @@ pub const WIDE_LANES: usize = 16;
 pub trait Kernel {
     /// What the kernel returns.
     type Output;
-    /// The body, whose batches (where it batches lanes) hold `BATCH` lanes: [`LANES`] or
-    /// [`WIDE_LANES`], as the level's registers suit. Mark it `#[inline(always)]`.
+    /// The body, whose batches (where it batches lanes) hold `BATCH` lanes: [`LANES`],
+    /// [`WIDE_LANES`] or [`AVX2_LANES`], as the level's registers suit. Mark it `#[inline(always)]`.
     fn run<const BATCH: usize>(self) -> Self::Output;
 }
 
 /// Runs `kernel` compiled for `level`, or for the best level below it that this CPU has (so no
 /// value of `level` can run an instruction the CPU lacks). `Scalar` and `Sse2` run the baseline
-/// with 8-lane batches, or 16 where [`BATCH_LANES_ENV`] asks; `Avx2` and `Avx512` their copies
-/// with 16-lane batches.
+/// with 8-lane batches, or 16 where [`BATCH_LANES_ENV`] asks; `Avx2` its copy with 32-lane
+/// batches, `Avx512` its copy with 16-lane batches.
 ///
 /// Fuzz builds (`cfg(fuzzing)`, set by cargo-fuzz) hold the baseline copy alone: the fuzz targets
 /// look for panics and hangs on bad input, which every copy shares, and each copy is minutes of
@@ -274,7 +282,7 @@ pub fn dispatch_level<K: LevelKernel>(level: SimdLevel, kernel: K) -> K::Output 
 /// baseline too (`Scalar`'s rasterizer and `Sse2`): `16`, the one value it takes (unset or
 /// empty: 8 there). The baseline copy of the quad traversal then runs 16-lane batches, so that
 /// both widths run on the same code: a lane's result never depends on the batch's width
-/// (`tests/simd_levels.rs`). For checking only; AVX2 and AVX-512 run 16 lanes anyway.
+/// (`tests/simd_levels.rs`). For checking only; AVX-512 runs 16 lanes anyway, AVX2 32.
 pub const BATCH_LANES_ENV: &str = "PELAGE_BATCH_LANES";
 
 /// An unknown value of [`BATCH_LANES_ENV`].
@@ -311,7 +319,7 @@ fn wide_batches_everywhere() -> bool {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     #[cfg_attr(fuzzing, allow(unused_imports))]
-    use super::{Kernel, LevelKernel, WIDE_LANES};
+    use super::{AVX2_LANES, Kernel, LevelKernel, WIDE_LANES};
 
     /// x86-64-v3.
     pub(super) fn has_avx2() -> bool {
@@ -338,7 +346,7 @@ mod x86 {
     #[cfg(not(fuzzing))]
     #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
     pub(super) fn avx2<K: Kernel>(kernel: K) -> K::Output {
-        kernel.run::<WIDE_LANES>()
+        kernel.run::<AVX2_LANES>()
     }
 
     #[cfg(not(fuzzing))]
@@ -425,10 +433,14 @@ mod tests {
     }
 
     #[test]
-    fn batches_hold_16_lanes_from_avx2_on() {
+    fn batches_hold_32_lanes_at_avx2_and_16_at_avx512() {
         for level in SimdLevel::ALL {
-            let wide = level.capped() >= SimdLevel::Avx2 || wide_batches_everywhere();
-            let lanes = if wide { WIDE_LANES } else { LANES };
+            let lanes = match level.capped() {
+                SimdLevel::Avx512 => WIDE_LANES,
+                SimdLevel::Avx2 => AVX2_LANES,
+                _ if wide_batches_everywhere() => WIDE_LANES,
+                _ => LANES,
+            };
             assert_eq!(dispatch(level, Width), lanes, "{level}");
         }
     }

@@ -1,5 +1,5 @@
-//! The fur fragment stage the renderer runs (`shade_fur_quad` and its `FurBatch`, 16 lanes at
-//! AVX2 and AVX-512, 8 on the baseline) against
+//! The fur fragment stage the renderer runs (`shade_fur_quad` and its `FurBatch`, 32 lanes at
+//! AVX2, 16 at AVX-512, 8 on the baseline) against
 //! its scalar twin (`shade_fur`, one fragment at a time) where the golden scenes do not look:
 //! every debug view (each ends the batch at another step: the tangents and the alpha after the
 //! alpha test, the shadow after the shadow's lookups) on the scenes that take the batch's

@@ -1,6 +1,6 @@
 //! The SIMD level is a speed choice, never an image choice: scenes render to the same bytes at
-//! every level this machine has (`pelage::simd`; at `avx2` and `avx512` the fur stage's batches
-//! hold 16 lanes, on the baseline 8), through the same cap `PELAGE_SIMD` sets, and
+//! every level this machine has (`pelage::simd`; the fur stage's batches hold 32 lanes at
+//! `avx2`, 16 at `avx512`, 8 on the baseline), through the same cap `PELAGE_SIMD` sets, and
 //! the `pelage` binary refuses an unknown level with exit status 2 and gives identical files at
 //! every level.
 
@@ -130,9 +130,9 @@ fn render_with(env: &[(&str, &str)], name: &str) -> Vec<u8> {
 
 #[test]
 fn sixteen_lane_batches_give_the_same_file_at_every_level() {
-    // `PELAGE_BATCH_LANES=16` runs 16-lane batches on the baseline copy too (avx2 and avx512
-    // run them anyway; sse2 runs 8 without it): a lane's result never depends on the batch's
-    // width.
+    // `PELAGE_BATCH_LANES=16` runs 16-lane batches on the baseline copy too (avx512 runs them
+    // anyway, avx2 runs 32 and sse2 8 without it): a lane's result never depends on the
+    // batch's width.
     let reference = render_with(&[("PELAGE_SIMD", "sse2")], "eight");
     for level in ["sse2", "avx2", "avx512"] {
         let wide = render_with(

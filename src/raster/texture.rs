@@ -1241,8 +1241,8 @@ impl NearestLookup<'_> {
     /// [`Sampler::alpha_nearest_in`] at `N` points `(u[i], v[i])` (`N` a multiple of 4), the
     /// same values: the coordinate clamp, the floor and the addressing as plain loops over
     /// the lanes, or, from the alpha plane of a level that wraps on power-of-two sizes, as one
-    /// gather of 16 lanes (AVX-512) or one a register of 8 (AVX2) where `level` allows it and
-    /// the CPU has it (`alpha_gather`); the bits are the same either way.
+    /// gather of 16 lanes (AVX-512) or one a register of 8 (AVX2, `N` a multiple of 8) where
+    /// `level` allows it and the CPU has it (`alpha_gather`); the bits are the same either way.
     #[allow(clippy::needless_range_loop)] // lanes as indexed loops: the form LLVM packs
     #[inline(always)]
     pub fn alpha_lanes<const N: usize>(
@@ -1267,7 +1267,7 @@ impl NearestLookup<'_> {
                 return unsafe { alpha_gather::nearest(&u, &v, width, height, masks, plane) };
             }
             if level >= SimdLevel::Avx2
-                && (N == alpha_gather::AVX2_LANES || N == 2 * alpha_gather::AVX2_LANES)
+                && N.is_multiple_of(alpha_gather::AVX2_LANES)
                 && alpha_gather::avx2_available()
             {
                 return unsafe { alpha_gather::nearest_avx2(&u, &v, width, height, masks, plane) };
@@ -1439,12 +1439,13 @@ mod tests {
     }
 
     #[test]
-    fn nearest_lookups_of_eight_and_sixteen_lanes_are_single_lookups() {
+    fn nearest_lookups_of_8_16_and_32_lanes_are_single_lookups() {
         // Lanes from the alpha plane of a wrapped level take `alpha_gather`: 16 with AVX-512
-        // (`nearest`), 8 or 16 with AVX2 (`nearest_avx2`, a register of 8 at a time); the
+        // (`nearest`), 8, 16 or 32 with AVX2 (`nearest_avx2`, a register of 8 at a time); the
         // clamped sampler and the 4-byte texels take the portable loops.
         nearest_lanes_are_single_lookups::<8>();
         nearest_lanes_are_single_lookups::<16>();
+        nearest_lanes_are_single_lookups::<32>();
     }
 
     fn nearest_lanes_are_single_lookups<const N: usize>() {

@@ -16,8 +16,8 @@
 //! twin, the plain statement of the shader), and [`shade_fur_quad`], which the renderer runs:
 //! it finds each quad's level of detail and mip levels once and hands the quad's shaded lanes
 //! to a [`FurBatch`], which runs every step above on [`BATCH_LANES`] lanes of the tile's quads
-//! (16 in the AVX2 and AVX-512 copies of the hot path, [`crate::simd`]; a batch holding at most
-//! 8 or 4 lanes runs the stage that wide) at once in structure-of-arrays
+//! (32 in the AVX2 copy of the hot path and 16 in the AVX-512 one, [`crate::simd`]; a batch
+//! holding at most 16, 8 or 4 lanes runs the stage that wide) at once in structure-of-arrays
 //! form (the texture pair's footprints with [`TrilinearPair::sample_lanes`], the alpha test as
 //! a lane mask, [`shading::ShadowLanes`] for step 6, lookup `k` of every lane in one batch;
 //! [`crate::shading::lanes`] for the rest). The golden tests render every scene with both.
@@ -1146,8 +1146,9 @@ fn entry_test_needed(textures: &LayerMaps<'_>, maps: &SurfaceMaps, p: &ShadePara
 }
 
 /// Lanes in a [`FurBatch`] on the baseline copy of the hot path ([`crate::simd::LANES`]): two
-/// quads' worth; the AVX2 and AVX-512 copies' batches hold [`crate::simd::WIDE_LANES`], which
-/// plain per-lane loops turn into pairs of 256-bit instructions or single 512-bit ones.
+/// quads' worth; the AVX2 copy's batches hold [`crate::simd::AVX2_LANES`] and the AVX-512
+/// copy's [`crate::simd::WIDE_LANES`], which plain per-lane loops turn into four 256-bit
+/// instructions or single 512-bit ones.
 pub const BATCH_LANES: usize = crate::simd::LANES;
 
 /// The width of the stage that runs a wider batch holding at most this many lanes
@@ -1157,13 +1158,18 @@ const NARROW_LANES: usize = crate::simd::LANES;
 /// The narrowest stage: one quad's lanes.
 const SMALLEST_LANES: usize = 4;
 
+/// The width of the stage that runs a 32-lane batch ([`crate::simd::AVX2_LANES`]) holding at
+/// most this many lanes: the 16-lane stage, whose copy the AVX-512 level's batches use too.
+const HALF_WIDE_LANES: usize = crate::simd::WIDE_LANES;
+
 /// The lanes from which a triangle's first batch tests which spots surely miss it
 /// ([`Spot::surely_misses`], about 380 instructions in f64) rather than computing every spot
 /// on its lanes: the test costs about what the spots' arithmetic on this many lanes does.
 const SPOTS_TEST_LANES: usize = 8;
 
 /// Shaded fragments of a draw's quads in one tile waiting for the whole fur stage, which runs
-/// on `N` lanes at once ([`BATCH_LANES`], or [`crate::simd::WIDE_LANES`] at AVX2 and AVX-512)
+/// on `N` lanes at once ([`BATCH_LANES`], [`crate::simd::AVX2_LANES`] at AVX2 or
+/// [`crate::simd::WIDE_LANES`] at AVX-512)
 /// in structure-of-arrays form: the texture pair's footprints, texel conversion and filter
 /// ([`TrilinearPair::sample_lanes`]), the alpha test as a lane mask, the spots and charring, the shell shadow's lookups ([`shading::ShadowLanes`]), the lit
 /// tangent, strand lighting and eq. 3.7 ([`crate::shading::lanes`]). The lanes of a batch lie
@@ -1222,8 +1228,11 @@ struct SpotsMissed {
 struct PendingQuads<const N: usize> {
     count: usize,
     varyings: BatchVaryings<N>,
-    slots: [Option<QuadSlots>; 4],
+    slots: [Option<QuadSlots>; MAX_HELD_QUADS],
 }
+
+/// The most quads [`FurBatch::hold`] holds: a batch's worth at [`crate::simd::AVX2_LANES`].
+const MAX_HELD_QUADS: usize = 8;
 
 impl<const N: usize> Default for PendingQuads<N> {
     /// None held.
@@ -1231,7 +1240,7 @@ impl<const N: usize> Default for PendingQuads<N> {
         PendingQuads {
             count: 0,
             varyings: BatchVaryings::default(),
-            slots: [const { None }; 4],
+            slots: [const { None }; MAX_HELD_QUADS],
         }
     }
 }
@@ -1408,8 +1417,8 @@ impl<'a, const N: usize> FurBatch<'a, N> {
         p: &ShadeParams,
         write: &mut impl FnMut(PixelSlot, Vec4),
     ) {
-        // Whole quads of a batch's worth, at most four of them.
-        const { assert!(N >= 4 && N.is_multiple_of(4) && N / 4 <= 4) };
+        // Whole quads of a batch's worth, at most eight of them.
+        const { assert!(N >= 4 && N.is_multiple_of(4) && N / 4 <= MAX_HELD_QUADS) };
         if self.pending.count != 0 && !same_triangle(&self.pending.varyings.triangle, &triangle) {
             self.join_held(textures, maps, layer, p, write);
         }
@@ -1566,6 +1575,8 @@ impl<'a, const N: usize> FurBatch<'a, N> {
             self.shade_narrow::<SMALLEST_LANES>(textures, maps, layer, p)
         } else if N > NARROW_LANES && self.len <= NARROW_LANES {
             self.shade_narrow::<NARROW_LANES>(textures, maps, layer, p)
+        } else if N > HALF_WIDE_LANES && self.len <= HALF_WIDE_LANES {
+            self.shade_narrow::<HALF_WIDE_LANES>(textures, maps, layer, p)
         } else {
             shade_batch_at_level(self, textures, maps, layer, p)
         };
@@ -1633,8 +1644,9 @@ impl<'a, const N: usize> FurBatch<'a, N> {
     ) -> BatchColours<N> {
         let len = self.len;
         self.len = 0;
-        // Lanes still alive: bit i for lane i.
-        let alive = (1u32 << len) - 1;
+        // Lanes still alive: bit i for lane i (`len` is at most 32, the masks' bits).
+        const { assert!(N <= 32) };
+        let alive = ((1u64 << len) - 1) as u32;
         let varyings = &self.varyings;
         let sampler = textures.sampler;
         // Step 2: the texel that lands here is read at uv − wind_uv.
@@ -2364,6 +2376,7 @@ mod tests {
     fn a_batch_interpolates_each_lane_as_the_whole_lane() {
         batch_lanes_are_whole_lanes::<BATCH_LANES>();
         batch_lanes_are_whole_lanes::<{ crate::simd::WIDE_LANES }>();
+        batch_lanes_are_whole_lanes::<{ crate::simd::AVX2_LANES }>();
     }
 
     fn batch_lanes_are_whole_lanes<const N: usize>() {

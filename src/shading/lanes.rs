@@ -1,5 +1,6 @@
 //! Fragments side by side, one array per vector component (shading stage): the four lanes of a 2×2
-//! quad ([`Vec3x4`]) or the lit lanes of a batch ([`Vec3x8`]; 16 lanes in the AVX-512 copy).
+//! quad ([`Vec3x4`]) or the lit lanes of a batch ([`Vec3x8`]; 32 lanes in the AVX2 copy, 16 in
+//! the AVX-512 copy).
 //! Operations are plain per-lane loops over the arrays, which LLVM turns into packed
 //! instructions as wide as the level's copy of the hot path allows ([`crate::simd`]: 512 bits
 //! with AVX-512, 256 with AVX2, 128 on SSE2 and NEON).
@@ -10,7 +11,7 @@
 //! reciprocals: Rust never contracts or reorders float operations on its own, and only
 //! correctly rounded operations are used (`+ − × ÷`, `sqrt`, comparisons and selects; never
 //! `wide`'s `recip`, `recip_sqrt` or `mul_add`). The tests check the bits against the twins on
-//! random, special and degenerate vectors, at 4, 8 and 16 lanes.
+//! random, special and degenerate vectors, at 4, 8, 16 and 32 lanes.
 
 // Lanes are indexed loops over several arrays at once: the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
@@ -250,6 +251,7 @@ pub(crate) mod tests {
         twins_bit_for_bit::<4>();
         twins_bit_for_bit::<8>();
         twins_bit_for_bit::<16>();
+        twins_bit_for_bit::<32>();
     }
 
     fn twins_bit_for_bit<const N: usize>() {

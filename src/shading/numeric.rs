@@ -97,7 +97,7 @@ pub(crate) fn pow01_lanes<const N: usize>(base: [f32; N], exponent: [f32; N]) ->
 ///
 /// Written as plain per-lane loops over arrays of the scalar steps (no `wide` type): LLVM turns
 /// a batch's loop into 256-bit instructions in the AVX2 copy of the hot path ([`crate::simd`];
-/// two a step for its 16 lanes) and into 128-bit halves in the baseline's 8, while
+/// four a step for its 32 lanes) and into 128-bit halves in the baseline's 8, while
 /// `wide::f32x8` is always two halves in a baseline build. Each lane runs the scalar [`pow01`]'s IEEE operations in its order.
 #[inline(always)]
 pub(crate) fn pow01_diffuse_specular_dampened_lanes<const N: usize>(

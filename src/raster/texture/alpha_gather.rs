@@ -1,7 +1,7 @@
 //! The shell shadow's nearest alpha reads of a batch with gathers
 //! ([`super::NearestLookup::alpha_lanes`] from a level's alpha plane, where both axes wrap on a
-//! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), 8 or 16 with AVX2 ([`nearest_avx2`],
-//! 8 a register), the coordinates, floors and addressing of the lanes in one register each, and
+//! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), a multiple of 8 with AVX2
+//! ([`nearest_avx2`], 8 a register: a batch of 32 at that level), the coordinates, floors and addressing of the lanes in one register each, and
 //! their alpha bytes in one gather a register.
 //!
 //! Why intrinsics: written as portable loops, LLVM split the 16-lane coordinate steps into two
@@ -122,11 +122,12 @@ pub(super) fn avx2_available() -> bool {
     false
 }
 
-/// [`nearest`] of a batch of the AVX2 level with AVX2: 8 or 16 lanes, each 8 in 256-bit
-/// registers with one 8-lane gather; the same steps and the same bits.
+/// [`nearest`] of a batch of the AVX2 level with AVX2: a multiple of 8 lanes (the level's
+/// batches hold 32, its narrower stages 16 or 8), each 8 in 256-bit registers with one 8-lane
+/// gather; the same steps and the same bits.
 ///
 /// # Safety
-/// The CPU has AVX2 ([`avx2_available`]); `N` is [`AVX2_LANES`] or twice it; the rest as
+/// The CPU has AVX2 ([`avx2_available`]); `N` is a multiple of [`AVX2_LANES`]; the rest as
 /// [`nearest`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -139,7 +140,7 @@ pub(super) unsafe fn nearest_avx2<const N: usize>(
     [mask_u, mask_v]: [i32; 2],
     plane: &[u8],
 ) -> [f32; N] {
-    assert!(N == AVX2_LANES || N == 2 * AVX2_LANES);
+    assert!(N.is_multiple_of(AVX2_LANES));
     let floor_of = |c: &[f32], size: u32| -> __m256i {
         assert!(c.len() == AVX2_LANES);
         // SAFETY: 8 floats, one 256-bit register.
