@@ -205,7 +205,8 @@ pub trait Kernel {
     /// What the kernel returns.
     type Output;
     /// The body, whose batches (where it batches lanes) hold `BATCH` lanes: [`LANES`],
-    /// [`WIDE_LANES`] or [`AVX2_LANES`], as the level's registers suit. Mark it `#[inline(always)]`.
+    /// [`WIDE_LANES`] or [`AVX2_LANES`], as the level's registers suit. Mark it
+    /// `#[inline(always)]`.
     fn run<const BATCH: usize>(self) -> Self::Output;
 }
 

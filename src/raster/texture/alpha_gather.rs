@@ -1,8 +1,9 @@
 //! The shell shadow's nearest alpha reads of a batch with gathers
 //! ([`super::NearestLookup::alpha_lanes`] from a level's alpha plane, where both axes wrap on a
 //! power-of-two size): 16 lanes with AVX-512 ([`nearest`]), a multiple of 8 with AVX2
-//! ([`nearest_avx2`], 8 a register: a batch of 32 at that level), the coordinates, floors and addressing of the lanes in one register each, and
-//! their alpha bytes in one gather a register.
+//! ([`nearest_avx2`], 8 a register: a batch of 32 at that level), the coordinates, floors and
+//! addressing of the lanes in one register each, and their alpha bytes in one gather a
+//! register.
 //!
 //! Why intrinsics: written as portable loops, LLVM split the 16-lane coordinate steps into two
 //! 256-bit halves, widened the row products to 64 bits (`vpmullq`) and read the bytes as 16 scalar
